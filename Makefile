@@ -1,0 +1,20 @@
+# Two commands do everything on a fresh Debian 12 machine (as root):
+#   make demo   set up what is missing, then build every output under build/
+#   make test   set up what is missing, then run the test suite
+PY := .venv/bin/python
+
+.PHONY: demo test bootstrap clean
+bootstrap:
+	@./bootstrap.sh
+
+demo: bootstrap
+	@$(PY) -m platform_tools.demo --out build
+
+# pytest exits 5 when it collected no test: that is a failure here, not a pass.
+test: bootstrap
+	@$(PY) -m pytest $(PYTEST_ARGS); rc=$$?; \
+	if [ $$rc -eq 5 ]; then echo "make test: pytest collected no tests" >&2; fi; \
+	exit $$rc
+
+clean:
+	rm -rf build

@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# Set up everything this repository needs on a Debian 12 machine, idempotently.
+#
+#   ./bootstrap.sh          (make demo / make test call it for you)
+#
+# 1. Debian packages: installed with apt-get when missing (as root), otherwise the
+#    exact command to run is printed and the script stops.
+# 2. .venv on /usr/bin/python3 with --system-site-packages, so that Debian's mrcal
+#    and its numpy 1.x are the ones Python imports.
+# 3. pip install -e '.[dev]' into it, redone only when pyproject.toml changes.
+set -euo pipefail
+cd "$(dirname "$0")"
+
+# What each Debian package is for:
+#   python3-venv            the virtualenv itself
+#   python3-mrcal mrcal     camera calibration solver (Python API and command-line tools)
+#   mrgingham               chessboard detector mrcal uses (compared against in bench/)
+#   python3-numpy           numpy 1.x, the one mrcal is built against
+#   python3-dev build-essential  compile wheels that have no binary for this Python
+#   libgl1 libglib2.0-0     shared libraries the CadQuery/OCP wheels load
+#   chromium chromium-driver  the real browser the generated web pages are tested in
+DEBIAN_PACKAGES=(
+    python3-venv python3-mrcal mrcal mrgingham python3-numpy
+    python3-dev build-essential libgl1 libglib2.0-0
+    chromium chromium-driver
+)
+
+say() { printf 'bootstrap: %s\n' "$*" >&2; }
+
+missing=()
+for p in "${DEBIAN_PACKAGES[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+        missing+=("$p")
+    fi
+done
+if ((${#missing[@]})); then
+    cmd="apt-get update && apt-get install -y --no-install-recommends ${missing[*]}"
+    if [[ $(id -u) -ne 0 ]]; then
+        say "missing Debian packages: ${missing[*]}"
+        say "run as root:  $cmd"
+        exit 2
+    fi
+    say "installing Debian packages: ${missing[*]}"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+VENV=.venv
+if [[ ! -x $VENV/bin/python ]]; then
+    say "creating $VENV on /usr/bin/python3 (with Debian's site packages)"
+    /usr/bin/python3 -m venv --system-site-packages "$VENV"
+fi
+
+stamp=$VENV/.installed
+want=$(cat pyproject.toml bootstrap.sh | sha256sum | cut -d' ' -f1)
+if [[ ! -f $stamp || $(cat "$stamp") != "$want" ]]; then
+    say "installing the project and its Python dependencies into $VENV"
+    "$VENV/bin/python" -m pip install -q --disable-pip-version-check --upgrade pip
+    "$VENV/bin/python" -m pip install -q --disable-pip-version-check -e '.[dev]'
+    # CadQuery and nlopt without their declared dependencies: nlopt's wheels declare
+    # numpy>=2 but run on Debian's numpy 1.24, which mrcal needs (see pyproject.toml).
+    "$VENV/bin/python" -m pip install -q --disable-pip-version-check --no-deps \
+        cadquery==2.8.0 nlopt==2.9.1
+    # The pin in pyproject.toml keeps numpy < 2; check that mrcal really imports.
+    "$VENV/bin/python" -c 'import mrcal, numpy, cv2, cadquery; assert numpy.__version__ < "2"' \
+        || { say "mrcal does not import in $VENV (numpy $("$VENV/bin/python" -c 'import numpy; print(numpy.__version__)'))"; exit 1; }
+    echo "$want" >"$stamp"
+fi

@@ -1,0 +1,32 @@
+"""`calibrate`: camera calibration of the rig. Each subcommand lives in its own module and registers
+itself through ``register(subparsers)``."""
+from __future__ import annotations
+
+import argparse
+from typing import Sequence
+
+from platform_tools.cli.common import dispatch
+
+from . import nominal_cmd
+
+COMMANDS = [nominal_cmd]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="calibrate",
+        description="Calibrate the rig's cameras: nominal models from the rig description, thermal "
+                    "intrinsics from heated-checkerboard images, extrinsics.",
+        epilog="Exit codes: 0 ok, 1 a check failed, 2 bad input or usage.")
+    sub = parser.add_subparsers(title="commands", metavar="COMMAND")
+    for module in COMMANDS:
+        module.register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    return dispatch(build_parser(), argv)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,79 @@
+"""`make demo`: run the project's main job end to end and say what it made and where.
+
+Each step is a real command, run as a user would run it (its command line is printed first). Every
+capability of the project adds its step here; everything is written under the --out folder.
+"""
+from __future__ import annotations
+
+import argparse
+import shlex
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@dataclass(frozen=True)
+class Step:
+    title: str
+    argv: tuple[str, ...]   # "{out}" is replaced by the step's output folder
+    out: str                # sub-folder of the demo's output folder
+
+
+def _tool(name: str) -> tuple[str, ...]:
+    """A console script of this project, run with the same interpreter as the demo."""
+    return (sys.executable, "-m", {"platform_tools": "platform_tools.cli.main",
+                                   "calibrate": "calibration.cli"}[name])
+
+
+STEPS: list[Step] = [
+    Step("rig description, resolved, and its sensor frames",
+         _tool("platform_tools") + ("rig", "export", "--out", "{out}"), "rig"),
+    Step("nominal camera models from the rig description",
+         _tool("calibrate") + ("nominal", "--out", "{out}"), "calibration/nominal"),
+]
+
+
+def _display(argv: tuple[str, ...]) -> str:
+    """The command as a user types it (console script name instead of python -m)."""
+    if len(argv) > 2 and argv[1] == "-m":
+        name = {"platform_tools.cli.main": "platform_tools", "calibration.cli": "calibrate"}.get(argv[2], argv[2])
+        argv = (name,) + argv[3:]
+    return shlex.join(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m platform_tools.demo",
+                                     description="Build every output of the project under --out.")
+    parser.add_argument("--out", type=Path, default=REPO / "build", help="output folder (default: build/)")
+    args = parser.parse_args(argv)
+    out = args.out.resolve()
+    made: list[tuple[Step, Path, float]] = []
+    for i, step in enumerate(STEPS, 1):
+        target = out / step.out
+        cmd = tuple(a.replace("{out}", str(target)) for a in step.argv)
+        print(f"[{i}/{len(STEPS)}] {step.title}\n      $ {_display(cmd)}", flush=True)
+        t0 = time.monotonic()
+        result = subprocess.run(cmd, cwd=REPO, stdout=subprocess.DEVNULL)
+        if result.returncode != 0:
+            print(f"demo: step {i} failed (exit {result.returncode}): {_display(cmd)}", file=sys.stderr)
+            return result.returncode
+        made.append((step, target, time.monotonic() - t0))
+
+    print(f"\nWhat the demo made, under {out}:")
+    for step, target, seconds in made:
+        files = sorted(p for p in target.rglob("*") if p.is_file())
+        size = sum(p.stat().st_size for p in files)
+        print(f"  {step.title} ({seconds:.1f} s): {target.relative_to(out)}/  {len(files)} files, {size / 1024:.0f} KiB")
+        for p in files[:12]:
+            print(f"      {p.relative_to(out)}")
+        if len(files) > 12:
+            print(f"      ... and {len(files) - 12} more")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

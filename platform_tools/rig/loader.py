@@ -1,0 +1,56 @@
+"""Load `config/rig.yaml` (or another rig file) with overrides into a validated :class:`Rig`.
+
+Every problem becomes one line naming the file and line (or the ``--set`` it came from), the key
+path, the value and what was expected; :class:`RigError` carries them all.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Sequence
+
+from .model import Rig
+from .overrides import Override, OverrideError, apply_overrides, override_for, parse_override
+from .rules import check_rules
+from .schema import RigDescription
+from .typed import Problem, convert
+from .yamlsource import YamlSource, YamlSourceError, load_yaml_file
+
+#: the rig description of this repository
+DEFAULT_RIG = Path(__file__).resolve().parents[2] / "config" / "rig.yaml"
+
+
+class RigError(Exception):
+    """The rig description is not valid. ``lines`` holds one message per problem."""
+
+    def __init__(self, lines: Sequence[str]):
+        self.lines = list(lines)
+        super().__init__("\n".join(self.lines))
+
+
+def _locate(problem: Problem, source: YamlSource, overrides: Sequence[Override]) -> str:
+    ov = override_for(problem, overrides)
+    where = f"--set {ov.text}" if ov else source.where(problem.path)
+    return f"{where}: {problem}"
+
+
+def load_rig(path: Path | str | None = None, overrides: Sequence[str] = ()) -> Rig:
+    """Read, override, type-check and rule-check a rig description. Raises :class:`RigError`."""
+    path = Path(path) if path is not None else DEFAULT_RIG
+    try:
+        source = load_yaml_file(path)
+        parsed = [parse_override(o) for o in overrides]
+        data = source.data
+        if not isinstance(data, dict):
+            raise RigError([f"{path}: expected a YAML mapping at the top level, got {type(data).__name__}"])
+        data = apply_overrides(data, parsed, RigDescription)
+    except (YamlSourceError, OverrideError) as exc:
+        raise RigError([str(exc)]) from None
+
+    desc, problems = convert(RigDescription, data)
+    if problems:
+        raise RigError([_locate(p, source, parsed) for p in problems])
+    rig = Rig(desc, path, tuple(overrides))
+    problems = check_rules(rig)
+    if problems:
+        raise RigError([_locate(p, source, parsed) for p in problems])
+    return rig

@@ -1,0 +1,347 @@
+"""The rig description's types: what `config/rig.yaml` may say, with units and ranges.
+
+Every class is a frozen dataclass; every number carries its unit in its name (``_mm``, ``_deg``,
+``_g``, ``_v``, ``_w``, ``_hz``) and in its ``Annotated`` metadata. Numbers that come from a vendor
+(the size of a bought part, its mass, its lens) are :class:`Sourced`: a value with the source it was
+read from and how far to trust it, so that estimates stay visible (``platform_tools rig estimates``).
+Design choices (a wall thickness, a baseline) are plain numbers: the rig description *is* their source.
+
+Cross-field rules (a baseline wider than the camera, fits in order, parts that exist) live in
+:mod:`platform_tools.rig.rules`; derived values (poses of optical frames, focal lengths in pixels)
+in :mod:`platform_tools.rig.model`.
+"""
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from typing import Annotated, Literal, Mapping, Optional
+
+from .typed import Ge, Gt, Le, Lt, Unit
+
+# ----------------------------------------------------------------------------- units
+Mm = Annotated[float, Unit("mm")]
+PosMm = Annotated[float, Unit("mm"), Gt(0)]
+Deg = Annotated[float, Unit("deg"), Ge(-360), Le(360)]
+Vec3Mm = Annotated[tuple[float, float, float], Unit("mm")]
+Vec3Deg = Annotated[tuple[float, float, float], Unit("deg"), Ge(-360), Le(360)]
+Hz = Annotated[float, Unit("Hz"), Gt(0)]
+Volt = Annotated[float, Unit("V"), Ge(0)]
+
+
+class Confidence(enum.Enum):
+    """How far to trust a vendor number, best first."""
+    DATASHEET = "datasheet"        # read from the vendor's own drawing or datasheet
+    MEASURED = "measured"          # measured on a real part or a public model of one
+    SECOND_HAND = "second_hand"    # a vendor figure quoted by someone else
+    ESTIMATE = "estimate"          # our guess: check on a real part and update
+
+
+class PartKind(enum.Enum):
+    STEREO_CAMERA = "stereo_camera"
+    THERMAL_CAMERA = "thermal_camera"
+    LENS = "lens"
+    COMPUTER = "computer"
+    CAPTURE_CARD = "capture_card"
+    BATTERY = "battery"
+    BATTERY_ADAPTER = "battery_adapter"
+    FAN = "fan"
+    SWITCH = "switch"
+    BUTTON = "button"
+    ANTENNA = "antenna"
+    CONVERTER = "converter"
+    FUSE = "fuse"
+    SCREW = "screw"
+    INSERT = "insert"
+
+
+class Face(enum.Enum):
+    """Faces of a part's envelope box, in the part's own frame (x forward, y left, z up)."""
+    FRONT = "front"
+    REAR = "rear"
+    LEFT = "left"
+    RIGHT = "right"
+    TOP = "top"
+    BOTTOM = "bottom"
+
+
+# ----------------------------------------------------------------------------- provenance
+@dataclass(frozen=True)
+class Source:
+    """Where vendor numbers were read."""
+    title: str
+    url: Optional[str] = None
+
+
+@dataclass(frozen=True)
+class Sourced:
+    """A vendor number with its provenance: ``{value: 21, source: boson_groupgets, confidence: second_hand}``."""
+    value: float
+    source: str
+    confidence: Confidence
+    note: Optional[str] = None
+
+
+SourcedMm = Annotated[Sourced, Unit("mm"), Gt(0)]
+SourcedG = Annotated[Sourced, Unit("g"), Gt(0)]
+SourcedW = Annotated[Sourced, Unit("W"), Ge(0)]
+
+
+# ----------------------------------------------------------------------------- bought parts
+@dataclass(frozen=True)
+class Envelope:
+    """The box a part occupies, in its own frame: x depth (forward), y width (left), z height (up)."""
+    x: SourcedMm
+    y: SourcedMm
+    z: SourcedMm
+
+
+@dataclass(frozen=True)
+class MountingPattern:
+    """Holes on one face of a part; positions are (u, v) from the face centre, in mm.
+
+    u and v run along the face's two other axes in x, y, z order (a bottom face: u = x, v = y).
+    """
+    face: Face
+    thread: str
+    positions_mm: tuple[tuple[float, float], ...]
+    depth_mm: PosMm
+    source: str
+    confidence: Confidence
+
+
+@dataclass(frozen=True)
+class VoltageRange:
+    min: Volt
+    max: Volt
+
+
+@dataclass(frozen=True)
+class Part:
+    kind: PartKind
+    vendor: str
+    part_number: str
+    description: str
+    mass_g: SourcedG
+    envelope_mm: Envelope
+    power_w: Optional[SourcedW] = None
+    supply_v: Optional[VoltageRange] = None
+    output_v: Optional[VoltageRange] = None
+    #: part-specific dimensions (a lens length, a rail width), each with its source
+    dims: Mapping[str, Sourced] = field(default_factory=dict)
+    mounting: tuple[MountingPattern, ...] = ()
+
+
+# ----------------------------------------------------------------------------- cameras
+@dataclass(frozen=True)
+class CameraModelSpec:
+    """Nominal optics of a camera: what a calibration starts from and synthetic images are made with."""
+    width_px: Annotated[int, Gt(0)]
+    height_px: Annotated[int, Gt(0)]
+    pixel_pitch_um: Annotated[Sourced, Unit("um"), Gt(0)]
+    focal_length_mm: Annotated[Sourced, Unit("mm"), Gt(0)]
+    hfov_deg: Annotated[Sourced, Unit("deg"), Gt(0), Lt(180)]
+    projection: Literal["pinhole", "fisheye"]
+    fps: Hz
+    vfov_deg: Optional[Annotated[Sourced, Unit("deg"), Gt(0), Lt(180)]] = None
+
+
+@dataclass(frozen=True)
+class PoseSpec:
+    """A pose in a parent frame: translation in mm, then roll-pitch-yaw in degrees.
+
+    rpy follows URDF: fixed axes x, y, z, so R = Rz(yaw) @ Ry(pitch) @ Rx(roll).
+    """
+    xyz_mm: Vec3Mm
+    rpy_deg: Vec3Deg = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class StereoCameraSpec:
+    """The ZED X. `pose` places its camera centre (midway between the optical centres) in the rig frame."""
+    part: str
+    camera_model: str
+    pose: PoseSpec
+
+
+@dataclass(frozen=True)
+class ThermalCameraSpec:
+    #: Boson camera serial number (bosonGetCameraSN); null until the rig is built
+    serial: Optional[Annotated[int, Gt(0)]]
+    #: stable device name given by udev (/dev/<name>)
+    device_name: str
+
+
+@dataclass(frozen=True)
+class ThermalPairSpec:
+    """The Boson stereo pair. `pose` places the midpoint between the two optical centres in the rig frame;
+    left is at +baseline/2 along the pair's y axis (the rig's left when looking forward)."""
+    part: str
+    lens: str
+    camera_model: str
+    baseline_mm: PosMm
+    pose: PoseSpec
+    left: ThermalCameraSpec
+    right: ThermalCameraSpec
+
+
+@dataclass(frozen=True)
+class Sensors:
+    zed_x: StereoCameraSpec
+    thermal: ThermalPairSpec
+
+
+# ----------------------------------------------------------------------------- enclosure, printing
+@dataclass(frozen=True)
+class Fits:
+    """Clearance per side, by name of fit."""
+    press_mm: Annotated[float, Unit("mm"), Ge(0)]
+    sliding_mm: PosMm
+    loose_mm: PosMm
+
+
+@dataclass(frozen=True)
+class HoleSizes:
+    """Printed clearance-hole diameters for one screw size, by fit."""
+    close_mm: PosMm
+    normal_mm: PosMm
+    loose_mm: PosMm
+
+
+@dataclass(frozen=True)
+class Printer:
+    name: str
+    nozzle_mm: PosMm
+    layer_mm: PosMm
+    bed_mm: Annotated[tuple[float, float, float], Unit("mm"), Gt(0)]
+    material: str
+    density_g_cm3: Annotated[float, Unit("g/cm3"), Gt(0)]
+    filament_diameter_mm: PosMm
+    max_overhang_deg: Annotated[float, Unit("deg"), Gt(0), Lt(90)]
+    max_bridge_mm: PosMm
+    #: the thinnest wall as a multiple of the nozzle width
+    min_wall_nozzles: Annotated[float, Ge(1)] = 2.0
+
+
+@dataclass(frozen=True)
+class Handles:
+    top: bool
+    sides: bool
+    grip_diameter_mm: PosMm
+    grip_length_mm: PosMm
+    clearance_mm: PosMm  # room for the fingers between grip and case
+
+
+@dataclass(frozen=True)
+class HeatSink:
+    """The copper heat sink clamped around each Boson body (machined)."""
+    material: str
+    density_g_cm3: Annotated[float, Unit("g/cm3"), Gt(0)]
+    wall_mm: PosMm
+    fin_count: Annotated[int, Ge(1)]
+    fin_thickness_mm: PosMm
+    fin_height_mm: PosMm
+
+
+@dataclass(frozen=True)
+class Vents:
+    slot_width_mm: PosMm
+    slot_length_mm: PosMm
+    #: vent open area as a multiple of the fans' inlet area (at least 1)
+    min_area_ratio: Annotated[float, Ge(1)]
+
+
+@dataclass(frozen=True)
+class Enclosure:
+    wall_mm: PosMm
+    corner_radius_mm: Annotated[float, Unit("mm"), Ge(0)]
+    component_clearance_mm: PosMm
+    heat_sink_gap_mm: PosMm
+    split: Literal["horizontal", "front_back"]
+    screw: str
+    insert: str
+    screw_fit: Literal["close", "normal", "loose"]
+    handles: Handles
+    heat_sink: HeatSink
+    vents: Vents
+
+
+@dataclass(frozen=True)
+class Printing:
+    printer: Printer
+    fits: Fits
+    holes: Mapping[str, HoleSizes]
+
+
+# ----------------------------------------------------------------------------- on-device
+@dataclass(frozen=True)
+class Sync:
+    """Hardware trigger from the capture card to both Bosons."""
+    source_part: str
+    connector: str
+    signal_pin: Annotated[int, Gt(0)]
+    ground_pin: Annotated[int, Gt(0)]
+    level_v: Volt
+    rate_hz: Hz
+    edge: Literal["rising", "falling"]
+    boson_mode: Literal["slave", "master", "disabled"]
+    #: write the sync mode to the Bosons' flash (a slave without a trigger shows no video)
+    persist: bool
+
+
+@dataclass(frozen=True)
+class RecordButton:
+    gpio_pin: Annotated[int, Gt(0), Le(40)]
+    led_pin: Annotated[int, Gt(0), Le(40)]
+    pin_numbering: Literal["BOARD", "BCM"]
+    bounce_ms: Annotated[int, Ge(0)]
+    long_press_s: Annotated[float, Gt(0)]
+
+
+@dataclass(frozen=True)
+class Recording:
+    data_mount: str
+    output_dir: str
+    storage_format: Literal["mcap"]
+    compression_preset: Literal["none", "fastwrite", "zstd_fast", "zstd_small"]
+    split_size_gb: Annotated[float, Gt(0)]
+    split_duration_s: Annotated[float, Gt(0)]
+    cache_mb: Annotated[int, Gt(0)]
+    min_free_gb: Annotated[float, Ge(0)]
+    stop_grace_s: Annotated[float, Gt(0)]
+    button: RecordButton
+
+
+@dataclass(frozen=True)
+class Thermal8Bit:
+    """16-bit raw thermal to 8-bit, as the paper: min-max (with percentile clip), CLAHE, bilateral."""
+    percentile_low: Annotated[float, Ge(0), Lt(50)]
+    percentile_high: Annotated[float, Gt(50), Le(100)]
+    clahe_clip_limit: Annotated[float, Gt(0)]
+    clahe_tile_grid: Annotated[int, Gt(0)]
+    bilateral_d: Annotated[int, Gt(0)]
+    bilateral_sigma_color: Annotated[float, Gt(0)]
+    bilateral_sigma_space: Annotated[float, Gt(0)]
+
+
+@dataclass(frozen=True)
+class Processing:
+    thermal_8bit: Thermal8Bit
+    pair_rate_hz: Hz
+    #: thermal frames dropped on each side of an FFC period
+    ffc_margin_frames: Annotated[int, Ge(0)]
+
+
+# ----------------------------------------------------------------------------- the whole rig
+@dataclass(frozen=True)
+class RigDescription:
+    schema_version: Literal[1]
+    name: str
+    sources: Mapping[str, Source]
+    parts: Mapping[str, Part]
+    camera_models: Mapping[str, CameraModelSpec]
+    sensors: Sensors
+    enclosure: Enclosure
+    printing: Printing
+    sync: Sync
+    recording: Recording
+    processing: Processing

@@ -1,0 +1,112 @@
+"""Read YAML strictly and remember where every key was written.
+
+PyYAML silently keeps the last of two duplicate keys; a rig file with a key written twice is a
+mistake, so it is refused here. Every value's line number is kept, keyed by its key path, so that
+an error can say ``config/rig.yaml:57: sensors.thermal.baseline_mm: ...``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .typed import KeyPath, format_path
+
+
+class YamlSourceError(Exception):
+    """The file cannot be read or is not valid YAML. ``str()`` is one line naming the file."""
+
+
+@dataclass
+class YamlSource:
+    path: Path
+    data: Any
+    lines: dict[KeyPath, int] = field(default_factory=dict)
+
+    def line_of(self, path: KeyPath) -> int | None:
+        """Line of the deepest key on ``path`` that is written in the file."""
+        path = tuple(path)
+        while path:
+            if path in self.lines:
+                return self.lines[path]
+            path = path[:-1]
+        return None
+
+    def where(self, path: KeyPath) -> str:
+        line = self.line_of(path)
+        return f"{self.path}:{line}" if line else f"{self.path}"
+
+
+class _StrictLoader(yaml.SafeLoader):
+    pass
+
+
+def _walk(node: yaml.Node, path: KeyPath, lines: dict, file: Path) -> Any:
+    """Build Python data from a composed node, recording lines and refusing duplicate keys."""
+    lines[path] = node.start_mark.line + 1
+    if isinstance(node, yaml.MappingNode):
+        out: dict = {}
+        for key_node, value_node in node.value:
+            if not isinstance(key_node, yaml.ScalarNode):
+                raise YamlSourceError(f"{file}:{key_node.start_mark.line + 1}: {format_path(path)}: "
+                                      f"a key must be a plain value, not a list or mapping")
+            key = _scalar(key_node)
+            if key in out:
+                raise YamlSourceError(f"{file}:{key_node.start_mark.line + 1}: {format_path(path + (key,))}: "
+                                      f"key written twice (first on line {lines[path + (key,)]})")
+            out[key] = _walk(value_node, path + (key,), lines, file)
+            lines[path + (key,)] = key_node.start_mark.line + 1  # errors point at the key's line
+        return out
+    if isinstance(node, yaml.SequenceNode):
+        return [_walk(item, path + (i,), lines, file) for i, item in enumerate(node.value)]
+    return _scalar(node)
+
+
+def _scalar(node: yaml.ScalarNode) -> Any:
+    loader = _StrictLoader("")
+    try:
+        return loader.construct_object(node, deep=True)
+    finally:
+        loader.dispose()
+
+
+def load_yaml_text(text: str, path: Path | str) -> YamlSource:
+    path = Path(path)
+    try:
+        node = yaml.compose(text, Loader=_StrictLoader)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else str(path)
+        problem = exc.problem or exc.context or "cannot parse"
+        raise YamlSourceError(f"{where}: malformed YAML: {problem}") from None
+    except yaml.YAMLError as exc:
+        raise YamlSourceError(f"{path}: malformed YAML: {exc}") from None
+    if node is None:
+        raise YamlSourceError(f"{path}: the file is empty; expected a YAML mapping")
+    lines: dict[KeyPath, int] = {}
+    try:
+        data = _walk(node, (), lines, path)
+    except yaml.constructor.ConstructorError as exc:
+        mark = exc.problem_mark
+        where = f"{path}:{mark.line + 1}" if mark else str(path)
+        raise YamlSourceError(f"{where}: malformed YAML: {exc.problem}") from None
+    return YamlSource(path, data, lines)
+
+
+def load_yaml_file(path: Path | str) -> YamlSource:
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise YamlSourceError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise YamlSourceError(f"{path}: is a directory; expected a YAML file") from None
+    except PermissionError:
+        raise YamlSourceError(f"{path}: permission denied") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise YamlSourceError(f"{path}: not UTF-8 text (byte {exc.start}); expected a YAML file") from None
+    return load_yaml_text(text, path)
