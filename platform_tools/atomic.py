@@ -29,7 +29,10 @@ def _check_parent(path: Path) -> None:
 def write_bytes(path: Path | str, data: bytes) -> Path:
     path = Path(path)
     _check_parent(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
@@ -63,8 +66,11 @@ class OutputDir:
         _check_parent(self.final)
         if self.final.exists() and not self.final.is_dir():
             raise OutputError(f"{self.final}: exists and is not a folder")
-        self.stage = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.", suffix=".staging",
-                                           dir=self.final.parent))
+        try:
+            self.stage = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.", suffix=".staging",
+                                               dir=self.final.parent))
+        except OSError as exc:
+            raise OutputError(f"{self.final}: cannot write the output folder ({exc.strerror or exc})") from None
         return self.stage
 
     def __exit__(self, exc_type, exc, tb) -> bool:

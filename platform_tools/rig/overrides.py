@@ -33,7 +33,9 @@ class OverrideError(Exception):
     """An override cannot be parsed or names no key. ``str()`` is one line."""
 
 
-def parse_path(text: str) -> KeyPath:
+def parse_path(text: str, whole: str | None = None) -> KeyPath:
+    """``a.b[2].c`` -> ("a", "b", 2, "c"). ``whole`` is the override as written, for messages."""
+    whole = whole or text
     parts: list = []
     pos = 0
     while pos < len(text):
@@ -41,12 +43,12 @@ def parse_path(text: str) -> KeyPath:
             pos += 1
         m = _TOKEN.match(text, pos)
         if not m:
-            raise OverrideError(f"--set {text}: cannot read the key path at {text[pos:]!r}; "
+            raise OverrideError(f"--set {whole}: cannot read the key path at {text[pos:]!r}; "
                                 f"expected keys joined by dots, e.g. sensors.thermal.baseline_mm")
         parts.append(m.group(1) if m.group(1) is not None else int(m.group(2)))
         pos = m.end()
     if not parts or isinstance(parts[0], int):
-        raise OverrideError(f"--set {text}: expected a key path such as sensors.thermal.baseline_mm")
+        raise OverrideError(f"--set {whole}: expected a key path such as sensors.thermal.baseline_mm")
     return tuple(parts)
 
 
@@ -54,7 +56,7 @@ def parse_override(text: str) -> Override:
     if "=" not in text:
         raise OverrideError(f"--set {text}: expected KEY=VALUE, e.g. sensors.thermal.baseline_mm=150")
     key, raw = text.split("=", 1)
-    path = parse_path(key.strip())
+    path = parse_path(key.strip(), text)
     try:
         value = yaml.safe_load(raw) if raw.strip() else None
     except yaml.YAMLError:

@@ -142,7 +142,7 @@ def _describe(tp: Any, meta: tuple = ()) -> str:
     tp, more = _split_annotated(tp)
     meta = meta + more
     unit = _unit_of(meta)
-    bounds = " ".join(m.describe() for m in meta if isinstance(m, _BOUNDS))
+    bounds = " and ".join(m.describe() for m in meta if isinstance(m, _BOUNDS))
     origin = get_origin(tp)
     if tp is float:
         text = "a number" + (f" in {unit}" if unit else "")

@@ -1,0 +1,39 @@
+"""Fixtures shared by every test folder."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+RIG_YAML = REPO / "config" / "rig.yaml"
+
+
+@pytest.fixture(scope="session")
+def repo() -> Path:
+    return REPO
+
+
+@pytest.fixture(scope="session")
+def rig_text() -> str:
+    return RIG_YAML.read_text()
+
+
+def run_tool(module: str, *args: str, cwd: Path | None = None, timeout: float = 120) -> subprocess.CompletedProcess:
+    """Run a console script of this project as a user would (a fresh process), capturing its output."""
+    env = dict(os.environ, COLUMNS="120")
+    return subprocess.run([sys.executable, "-m", module, *args], cwd=cwd or REPO, env=env,
+                          capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.fixture
+def platform_tools():
+    return lambda *args, **kw: run_tool("platform_tools.cli.main", *args, **kw)
+
+
+@pytest.fixture
+def calibrate():
+    return lambda *args, **kw: run_tool("calibration.cli", *args, **kw)

@@ -1,0 +1,56 @@
+"""Outputs are written whole or not at all."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from platform_tools.atomic import OutputDir, OutputError, write_text
+
+
+def test_output_dir_swaps_in_whole(tmp_path: Path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "old.txt").write_text("old")
+    with OutputDir(out) as stage:
+        (stage / "new.txt").write_text("new")
+        assert not (out / "new.txt").exists()  # nothing visible until the block ends
+    assert sorted(p.name for p in out.iterdir()) == ["new.txt"]
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]  # no staging or backup folders left
+
+
+def test_output_dir_failure_leaves_previous_output(tmp_path: Path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "old.txt").write_text("old")
+    with pytest.raises(RuntimeError):
+        with OutputDir(out) as stage:
+            (stage / "half.txt").write_text("half")
+            raise RuntimeError("failed mid-way")
+    assert sorted(p.name for p in out.iterdir()) == ["old.txt"]
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+def test_output_dir_refuses_a_file(tmp_path: Path):
+    f = tmp_path / "f"
+    f.write_text("x")
+    with pytest.raises(OutputError, match="not a folder"):
+        with OutputDir(f):
+            pass
+
+
+def test_unwritable_place_is_an_output_error(tmp_path: Path):
+    # /sys refuses new entries even to root: the error names the path instead of a traceback
+    with pytest.raises(OutputError, match="/sys/rgbt-test"):
+        with OutputDir(Path("/sys/rgbt-test")):
+            pass
+    with pytest.raises(OutputError, match="/sys/rgbt-test.txt"):
+        write_text("/sys/rgbt-test.txt", "x")
+
+
+def test_write_text_replaces_atomically(tmp_path: Path):
+    p = tmp_path / "a" / "b.txt"
+    write_text(p, "one")
+    write_text(p, "two")
+    assert p.read_text() == "two"
+    assert [x.name for x in p.parent.iterdir()] == ["b.txt"]
