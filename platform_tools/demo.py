@@ -34,6 +34,11 @@ STEPS: list[Step] = [
          _tool("platform_tools") + ("rig", "export", "--out", "{out}"), "rig"),
     Step("nominal camera models from the rig description",
          _tool("calibrate") + ("nominal", "--out", "{out}"), "calibration/nominal"),
+    Step("two emulated Bosons put in external-sync slave mode (read, diff, apply, verify, trigger check)",
+         _tool("platform_tools") + ("boson-emulator", "--serial", "93588", "--serial", "93589", "--trigger",
+                                    "--session-out", "{out}", "--run", "boson-config", "--slave",
+                                    "--check-trigger", "--set", "sensors.thermal.left.serial=93588",
+                                    "--set", "sensors.thermal.right.serial=93589", "--json"), "boson"),
 ]
 
 

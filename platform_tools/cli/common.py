@@ -68,10 +68,12 @@ def print_json(obj: Any) -> None:
     sys.stdout.write("\n")
 
 
+_prog = "platform_tools"  # the running tool's name, set by dispatch (argv[0] is a path under python -m)
+
+
 def error(message: str) -> None:
-    prog = sys.argv[0].rsplit("/", 1)[-1] if sys.argv else "platform_tools"
     for line in message.splitlines() or [message]:
-        print(f"{prog}: error: {line}", file=sys.stderr)
+        print(f"{_prog}: error: {line}", file=sys.stderr)
 
 
 def run(handler: Callable[[argparse.Namespace], int | None], args: argparse.Namespace) -> int:
@@ -98,6 +100,8 @@ def run(handler: Callable[[argparse.Namespace], int | None], args: argparse.Name
 
 
 def dispatch(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> int:
+    global _prog
+    _prog = parser.prog
     args = parser.parse_args(argv)
     handler = getattr(args, "handler", None)
     if handler is None:

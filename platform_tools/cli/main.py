@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 from typing import Sequence
 
-from . import rig_cmd
+from . import boson_cmd, rig_cmd
 
 #: subcommand modules, in the order --help lists them
-COMMANDS = [rig_cmd]
+COMMANDS = [rig_cmd, boson_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:

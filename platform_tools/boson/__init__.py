@@ -1,0 +1,14 @@
+"""FLIR Boson serial control: the FSLP protocol (pure, on bytes), typed commands, a pyserial
+transport that survives re-enumeration, discovery by USB id and by serial number, the safe
+read-diff-apply-verify-revert set-up of external sync, and an emulated Boson on a pseudo-terminal.
+
+Module map:
+- ``fslp``       framing, escaping, CRC, sequence numbers, stream decoder (no I/O)
+- ``codes``      FLR_RESULT codes, one named exception class per code; the package's error types
+- ``commands``   the typed command table (function id, request and reply layout, enums)
+- ``transport``  pyserial port: open, flush, read with deadlines, re-open after re-enumeration
+- ``client``     one camera: sequence numbers, reply matching, retries with back-off, reboot
+- ``discovery``  cameras present (by-id links, pyserial port list, pyusb) and the rig's left/right
+- ``syncsetup``  read, diff, apply, verify, check the trigger, persist, revert on failure
+- ``emulator``   a stateful Boson on a pty with a by-id link, a simulated trigger and fault injection
+"""

@@ -1,0 +1,197 @@
+"""One Boson over one transport: sequence numbers, reply matching, retries with back-off, reboot.
+
+``call(command, *args)`` sends a request and returns the decoded reply value. A reply must echo the
+request's channel, sequence number and function id; anything else (a late reply to an earlier
+request, another channel) is discarded. No reply, a corrupt reply, and the transient results
+CamBusy / NotReady are retried a bounded number of times with exponential back-off; a port that
+vanishes mid-command is re-opened (the by-id path follows the camera) and the command retried.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from . import commands as C
+from . import fslp
+from .codes import BadReply, CameraError, PortGone, ReplyTimeout, TransportError, error_for
+from .transport import SerialTransport
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Timeouts:
+    """Seconds. ``first_s``: to the first reply byte; ``rest_s``: from there to the end of the reply;
+    ``slow_s``: first byte of slow commands (flash writes, FFC); ``reopen_s``: for a re-enumerated
+    port to come back (older Bosons take about 10 s to boot)."""
+    first_s: float = 1.0
+    rest_s: float = 2.0
+    slow_s: float = 5.0
+    reopen_s: float = 15.0
+
+    def first_for(self, cmd: C.Command | None) -> float:
+        return self.slow_s if cmd is not None and cmd.speed == C.SLOW else self.first_s
+
+
+@dataclass
+class Stats:
+    calls: int = 0
+    retries: int = 0
+    discarded: int = 0       # well-formed frames that did not match the request
+    bad_frames: int = 0      # CRC or framing errors seen
+    reopens: int = 0
+    errors: list[str] = field(default_factory=list)
+
+
+Hook = Callable[[str, bytes], None]   # (direction "tx"/"rx", raw bytes) for session logs
+
+
+class BosonClient:
+    def __init__(self, transport: SerialTransport, *, timeouts: Timeouts = Timeouts(), retries: int = 3,
+                 backoff_s: float = 0.02, label: str = "", hook: Hook | None = None, first_sequence: int = 1):
+        self.transport = transport
+        self.timeouts = timeouts
+        self.retries = retries
+        self.backoff_s = backoff_s
+        self.label = label or transport.path
+        self.hook = hook
+        self._seq = first_sequence - 1
+        self.stats = Stats()
+        self._decoder = fslp.StreamDecoder()
+
+    # ------------------------------------------------------------------ lifecycle
+    def open(self) -> "BosonClient":
+        if not self.transport.is_open:
+            self.transport.open()
+        return self
+
+    def close(self) -> None:
+        self.transport.close()
+
+    def __enter__(self) -> "BosonClient":
+        return self.open()
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    @property
+    def reopens(self) -> int:
+        return self.stats.reopens
+
+    def next_sequence(self) -> int:
+        self._seq = fslp.next_sequence(self._seq)
+        return self._seq
+
+    # ------------------------------------------------------------------ one exchange
+    def exchange(self, sequence: int, function_id: int, payload: bytes, first_s: float) -> fslp.Frame:
+        """Send one request and wait for its reply. Raises ReplyTimeout, BadReply or PortGone."""
+        raw = fslp.request(sequence, function_id, payload)
+        self.transport.flush_input()
+        self._decoder.reset()
+        self.transport.write(raw)
+        if self.hook:
+            self.hook("tx", raw)
+        t0 = time.monotonic()
+        deadline = t0 + first_s
+        got_bytes = False
+        while True:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise ReplyTimeout(f"{self.label}: no reply to 0x{function_id:08X} within "
+                                   f"{time.monotonic() - t0:.2f} s")
+            data = self.transport.read(remaining)
+            if not data:
+                continue
+            if self.hook:
+                self.hook("rx", data)
+            if not got_bytes:
+                got_bytes = True
+                deadline = max(deadline, time.monotonic() + self.timeouts.rest_s)
+            for item in self._decoder.feed(data):
+                if isinstance(item, fslp.FslpError):
+                    self.stats.bad_frames += 1
+                    raise BadReply(f"{self.label}: garbled reply to 0x{function_id:08X} ({item})")
+                if (item.channel, item.sequence, item.function_id) == (fslp.CHANNEL_COMMAND, sequence,
+                                                                       function_id) and not item.is_request:
+                    return item
+                self.stats.discarded += 1
+                log.debug("%s: discarded a frame (seq %d, id 0x%08X) while waiting for seq %d",
+                          self.label, item.sequence, item.function_id, sequence)
+
+    # ------------------------------------------------------------------ a command, with retries
+    def call_raw(self, function_id: int, payload: bytes = b"", *, command: C.Command | None = None,
+                 retries: int | None = None) -> bytes:
+        name = command.name if command else f"0x{function_id:08X}"
+        retries = self.retries if retries is None else retries
+        first_s = self.timeouts.first_for(command)
+        self.stats.calls += 1
+        last: Exception | None = None
+        for attempt in range(retries + 1):
+            if attempt:
+                self.stats.retries += 1
+                time.sleep(self.backoff_s * (2 ** (attempt - 1)))
+            try:
+                frame = self.exchange(self.next_sequence(), function_id, payload, first_s)
+            except PortGone as exc:
+                last = exc
+                log.info("%s: port lost during %s; waiting for it to come back", self.label, name)
+                self.transport.reopen(self.timeouts.reopen_s)
+                self.stats.reopens += 1
+                continue
+            except (ReplyTimeout, BadReply) as exc:
+                last = exc
+                log.info("%s: %s (attempt %d of %d)", self.label, exc, attempt + 1, retries + 1)
+                continue
+            if frame.status == 0:
+                return frame.payload
+            err = error_for(frame.status, name, self.label)
+            if err.transient and attempt < retries:
+                last = err
+                log.info("%s: %s; retrying", self.label, err)
+                continue
+            raise err
+        assert last is not None
+        self.stats.errors.append(str(last))
+        if isinstance(last, CameraError):
+            raise last
+        raise type(last)(f"{last} (gave up after {retries + 1} attempts)")
+
+    def call(self, command: C.Command, *args: Any, retries: int | None = None) -> Any:
+        payload = command.encode_request(*args)
+        reply = self.call_raw(command.function_id, payload, command=command, retries=retries)
+        try:
+            return command.decode_reply(reply)
+        except BadReply as exc:
+            raise BadReply(f"{self.label}: {exc}") from None
+
+    # ------------------------------------------------------------------ reboot
+    def reboot(self, *, boot_wait_s: float | None = None) -> None:
+        """Reboot and wait until the camera answers again on its (re-enumerated) port."""
+        raw = fslp.request(self.next_sequence(), C.REBOOT.function_id)
+        try:
+            self.transport.flush_input()
+            self.transport.write(raw)
+        except PortGone:
+            pass
+        if not self.transport.wait_gone(min(3.0, self.timeouts.reopen_s)):
+            log.warning("%s: the port did not disappear after the reboot request", self.label)
+        self.wait_ready(boot_wait_s)
+
+    def wait_ready(self, timeout_s: float | None = None) -> int:
+        """Re-open the port and poll the serial number until the camera answers; returns it."""
+        timeout_s = self.timeouts.reopen_s if timeout_s is None else timeout_s
+        deadline = time.monotonic() + timeout_s
+        self.transport.reopen(timeout_s)
+        self.stats.reopens += 1
+        while True:
+            try:
+                return self.call(C.GET_CAMERA_SN, retries=0)
+            except (TransportError, CameraError) as exc:
+                if isinstance(exc, PortGone):
+                    self.transport.reopen(max(deadline - time.monotonic(), 0.0))
+                if time.monotonic() > deadline:
+                    raise ReplyTimeout(f"{self.label}: the camera did not answer within {timeout_s:g} s "
+                                       f"after the reboot ({exc})") from None
+                time.sleep(0.05)

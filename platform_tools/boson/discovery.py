@@ -1,0 +1,200 @@
+"""Which Bosons are connected, and which one is the rig's left or right camera.
+
+Sources, merged by serial number:
+- the by-id folder (``/dev/serial/by-id``, or ``$PLATFORM_TOOLS_BOSON_BY_ID``, where the emulator
+  publishes its links): ``usb-FLIR_Boson_<SN>-if00``;
+- pyserial's port list, filtered on USB 09CB:4007 (ports udev gave no by-id link);
+- pyusb, also filtered on 09CB:4007: a camera on the bus whose serial port is missing (driver,
+  permissions) is reported so the user knows it is there;
+- the video device from ``/dev/v4l/by-id`` (or ``$PLATFORM_TOOLS_BOSON_V4L_BY_ID``).
+"""
+from __future__ import annotations
+
+import logging
+import os
+import re
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+log = logging.getLogger(__name__)
+
+USB_VID, USB_PID = 0x09CB, 0x4007
+BY_ID_ENV = "PLATFORM_TOOLS_BOSON_BY_ID"
+V4L_ENV = "PLATFORM_TOOLS_BOSON_V4L_BY_ID"
+_SERIAL_LINK = re.compile(r"^usb-FLIR_Boson_(\d+)-if0?0$")
+_VIDEO_LINK = "usb-FLIR_Boson_{sn}-video-index0"
+
+
+def by_id_dir() -> Path:
+    return Path(os.environ.get(BY_ID_ENV) or "/dev/serial/by-id")
+
+
+def v4l_dir() -> Path:
+    return Path(os.environ.get(V4L_ENV) or "/dev/v4l/by-id")
+
+
+@dataclass(frozen=True)
+class Found:
+    serial: int | None      # USB serial string / by-id name; confirmed with bosonGetCameraSN on use
+    port: str               # the name to open: the by-id link when there is one
+    device: str             # what it resolves to (/dev/ttyACM0, /dev/pts/5)
+    video: str | None       # /dev/videoN, when its by-id link exists
+    source: str             # "by-id", "port-list" or "usb" (on the bus, no serial port)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    def describe(self) -> str:
+        sn = f"SN {self.serial}" if self.serial is not None else "SN unknown"
+        return f"{sn} at {self.port}" + (f" (no serial port: {self.source})" if self.source == "usb" else "")
+
+
+def _video_for(serial: int | None) -> str | None:
+    if serial is None:
+        return None
+    link = v4l_dir() / _VIDEO_LINK.format(sn=serial)
+    return os.path.realpath(link) if link.exists() else None
+
+
+def _from_by_id() -> list[Found]:
+    folder = by_id_dir()
+    try:
+        names = sorted(os.listdir(folder))
+    except OSError:
+        return []
+    out = []
+    for name in names:
+        m = _SERIAL_LINK.match(name)
+        if not m:
+            continue
+        link = folder / name
+        if not link.exists():          # dangling: the camera is re-enumerating
+            continue
+        sn = int(m.group(1))
+        out.append(Found(sn, str(link), os.path.realpath(link), _video_for(sn), "by-id"))
+    return out
+
+
+def _from_port_list() -> list[Found]:
+    try:
+        from serial.tools import list_ports
+        ports = list(list_ports.comports())
+    except Exception as exc:   # pyserial's listing reads sysfs; never let it stop discovery
+        log.debug("pyserial port listing failed: %s", exc)
+        return []
+    out = []
+    for p in ports:
+        if (p.vid, p.pid) != (USB_VID, USB_PID):
+            continue
+        sn = int(p.serial_number) if p.serial_number and p.serial_number.isdigit() else None
+        out.append(Found(sn, p.device, os.path.realpath(p.device), _video_for(sn), "port-list"))
+    return out
+
+
+def _from_usb() -> list[Found]:
+    try:
+        import usb.core
+        devices = list(usb.core.find(find_all=True, idVendor=USB_VID, idProduct=USB_PID))
+    except Exception as exc:   # no libusb backend, no permission on /dev/bus/usb
+        log.debug("pyusb listing unavailable: %s", exc)
+        return []
+    out = []
+    for dev in devices:
+        sn = None
+        try:
+            import usb.util
+            text = usb.util.get_string(dev, dev.iSerialNumber) if dev.iSerialNumber else None
+            sn = int(text) if text and text.isdigit() else None
+        except Exception:
+            pass
+        out.append(Found(sn, f"usb bus {dev.bus} address {dev.address}", "", _video_for(sn), "usb"))
+    return out
+
+
+def discover() -> list[Found]:
+    """Every Boson found, by-id links first; a camera seen by several sources is listed once."""
+    found = _from_by_id()
+    seen_devices = {f.device for f in found}
+    seen_serials = {f.serial for f in found if f.serial is not None}
+    for f in _from_port_list():
+        if f.device not in seen_devices and (f.serial is None or f.serial not in seen_serials):
+            found.append(f)
+            seen_devices.add(f.device)
+            if f.serial is not None:
+                seen_serials.add(f.serial)
+    for f in _from_usb():
+        if f.serial is None or f.serial not in seen_serials:
+            found.append(f)
+    return found
+
+
+def describe_found(found: list[Found]) -> str:
+    usable = [f for f in found]
+    if not usable:
+        return (f"no Boson found (looked in {by_id_dir()}, the serial port list and USB for "
+                f"{USB_VID:04X}:{USB_PID:04X}); is it plugged in?")
+    return "found: " + "; ".join(f.describe() for f in usable)
+
+
+# ---------------------------------------------------------------------------- selection
+@dataclass(frozen=True)
+class Target:
+    label: str              # left, right, or "SN <n>" / the port
+    port: str
+    serial: int | None      # what bosonGetCameraSN must answer (None: not known in advance)
+    video: str | None = None
+
+
+class SelectionError(Exception):
+    """The selection cannot be satisfied; ``str()`` is one line naming the key or camera."""
+
+
+def _rig_serial(rig, side: str) -> int:
+    sn = getattr(rig.desc.sensors.thermal, side).serial
+    if sn is None:
+        raise SelectionError(
+            f"the {side} camera's serial number is not set: set sensors.thermal.{side}.serial in {rig.path} "
+            f"(or pass --set sensors.thermal.{side}.serial=SN; `platform_tools boson-info` lists the serials)")
+    return sn
+
+
+def _pick(found: list[Found], serial: int, label: str) -> Target:
+    matches = [f for f in found if f.serial == serial]
+    usable = [f for f in matches if f.source != "usb"]
+    if not usable:
+        if matches:
+            raise SelectionError(f"{label} camera (SN {serial}) is on USB but has no serial port "
+                                 f"(cdc_acm driver or permissions?); {describe_found(found)}")
+        raise SelectionError(f"{label} camera (SN {serial}) not found; {describe_found(found)}")
+    if len(usable) > 1:
+        raise SelectionError(f"{label} camera (SN {serial}) is ambiguous: "
+                             + ", ".join(f.port for f in usable))
+    f = usable[0]
+    return Target(label, f.port, serial, f.video)
+
+
+def select_targets(selection: str, rig, found: list[Found], port: str | None = None) -> list[Target]:
+    """Turn ``--camera`` (left, right, all or a serial number) and ``--port`` into targets."""
+    if port is not None:
+        serial = None
+        label = port
+        if selection in ("left", "right"):
+            serial, label = _rig_serial(rig, selection), selection
+        elif selection.isdigit():
+            serial, label = int(selection), f"SN {selection}"
+        return [Target(label, port, serial)]
+    if selection in ("left", "right"):
+        return [_pick(found, _rig_serial(rig, selection), selection)]
+    if selection.isdigit():
+        return [_pick(found, int(selection), f"SN {selection}")]
+    if selection != "all":
+        raise SelectionError(f"--camera {selection!r}: use left, right, all or a serial number")
+    sides = {s: getattr(rig.desc.sensors.thermal, s).serial for s in ("left", "right")}
+    if all(sn is not None for sn in sides.values()):
+        return [_pick(found, sn, side) for side, sn in sides.items()]
+    usable = [f for f in found if f.source != "usb"]
+    if not usable:
+        raise SelectionError(describe_found(found))
+    known = {sn: side for side, sn in sides.items() if sn is not None}
+    return [Target(known.get(f.serial, f"SN {f.serial}" if f.serial is not None else f.port),
+                   f.port, f.serial, f.video) for f in usable]
