@@ -7,9 +7,9 @@ from typing import Sequence
 
 from platform_tools.cli.common import dispatch
 
-from . import nominal_cmd
+from . import detect_cmd, nominal_cmd, synth_cmd, thermal_cmd, validate_cmd
 
-COMMANDS = [nominal_cmd]
+COMMANDS = [nominal_cmd, synth_cmd, detect_cmd, thermal_cmd, validate_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -39,6 +39,15 @@ STEPS: list[Step] = [
                                     "--session-out", "{out}", "--run", "boson-config", "--slave",
                                     "--check-trigger", "--set", "sensors.thermal.left.serial=93588",
                                     "--set", "sensors.thermal.right.serial=93589", "--json"), "boson"),
+    Step("synthetic thermal checkerboard images with ground truth (a small 'real' set)",
+         _tool("calibrate") + ("synth", "--out", "{out}", "--n", "8", "--difficulty", "real", "--seed", "1"),
+         "calibration/synth"),
+    Step("thermal intrinsics of that synthetic set (mrcal OPENCV8; all formats, report.html with its verdict)",
+         _tool("calibrate") + ("thermal", "--images", "{out}/synth", "--board", "10x7", "--square", "0.04",
+                               "--out", "{out}/thermal", "--exit-zero"), "calibration"),
+    Step("the solved thermal model against the synthetic set's true lens",
+         _tool("calibrate") + ("validate", "{out}/thermal/thermal.cameramodel", "--truth", "{out}/synth",
+                               "--exit-zero"), "calibration/thermal"),
 ]
 
 

@@ -1,0 +1,143 @@
+"""X-corner candidates: saddle points of the smoothed image, checked by sampling a ring around each.
+
+A chessboard corner is a saddle of the (blurred) image: the Hessian determinant is negative there,
+so ``S = Ixy^2 - Ixx Iyy`` peaks. Local maxima of S are only candidates: clutter corners, noise and
+edges also make saddles. A ring of samples around a true X-corner changes sign exactly four times,
+with opposite sectors of equal sign and the two lines through the corner nearly straight; the
+crossing angles give the two edge directions the grid builder follows.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from scipy.ndimage import map_coordinates
+
+from .refine import image_noise
+
+RING_SAMPLES = 32
+MAX_CANDIDATES = 3000
+NOISE_FLOOR = 4.0        # local std below this many times the image noise is not stretched
+
+
+@dataclass(frozen=True)
+class Candidates:
+    xy: np.ndarray          # (n, 2) pixel positions
+    dirs: np.ndarray        # (n, 2) angles (radians) of the two edge lines, each mod pi
+    strength: np.ndarray    # (n,) ring contrast, in units of the normalised image
+    sign: np.ndarray        # (n,) sign of the sector between dirs[0] and dirs[1] (going from 0 to 1)
+
+
+def normalise(img: np.ndarray) -> np.ndarray:
+    """Float image with column fixed-pattern noise removed and local contrast scaled to ~1."""
+    f = img.astype(np.float32)
+    # column pattern: median over rows of what a horizontal smoothing takes away
+    hp = f - cv2.blur(f, (9, 1), borderType=cv2.BORDER_REFLECT)
+    f = f - np.median(hp[::4], axis=0)[None, :]
+    return f
+
+
+def _smooth(f: np.ndarray, size: int) -> np.ndarray:
+    """Two box filters: a cheap, constant-time stand-in for a wide Gaussian."""
+    return cv2.blur(cv2.blur(f, (size, size)), (size, size))
+
+
+def local_contrast(f: np.ndarray, size: int = 21) -> tuple[np.ndarray, np.ndarray]:
+    """Local mean and standard deviation over a window of about ``size`` pixels."""
+    mu = _smooth(f, size)
+    var = _smooth((f - mu) ** 2, size)
+    return mu, np.sqrt(np.maximum(var, 1e-12))
+
+
+def saddle_response(g: np.ndarray) -> np.ndarray:
+    ixx = cv2.Sobel(g, cv2.CV_32F, 2, 0, ksize=3)
+    iyy = cv2.Sobel(g, cv2.CV_32F, 0, 2, ksize=3)
+    ixy = cv2.Sobel(g, cv2.CV_32F, 1, 1, ksize=3)
+    return ixy * ixy - ixx * iyy
+
+
+def local_maxima(S: np.ndarray, threshold: float, radius: int = 2) -> np.ndarray:
+    k = 2 * radius + 1
+    dil = cv2.dilate(S, np.ones((k, k), np.uint8))
+    ys, xs = np.nonzero((S >= dil) & (S > threshold))
+    if len(xs) > MAX_CANDIDATES:
+        keep = np.argsort(S[ys, xs])[::-1][:MAX_CANDIDATES]
+        ys, xs = ys[keep], xs[keep]
+    return np.stack([xs, ys], axis=1).astype(np.float64)
+
+
+def ring_check(g: np.ndarray, xy: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Ring test at ``radius``: (ok, dirs (n,2), strength, sign) for each point (vectorised)."""
+    n = len(xy)
+    N = RING_SAMPLES
+    dirs = np.zeros((n, 2))
+    strength = np.zeros(n)
+    sign = np.zeros(n)
+    ok = np.zeros(n, bool)
+    if n == 0:
+        return ok, dirs, strength, sign
+    ang = np.arange(N) * (2 * np.pi / N)
+    px = xy[:, 0:1] + radius * np.cos(ang)[None, :]
+    py = xy[:, 1:2] + radius * np.sin(ang)[None, :]
+    H, W = g.shape
+    inside = (px.min(1) >= 0) & (py.min(1) >= 0) & (px.max(1) <= W - 1) & (py.max(1) <= H - 1)
+    vals = map_coordinates(g, [py.ravel(), px.ravel()], order=1, mode="nearest").reshape(n, N)
+    vals = vals - np.median(vals, axis=1, keepdims=True)
+    pos = vals > 0
+    change = pos != np.roll(pos, -1, axis=1)          # sign change between sample k and k+1
+    four = inside & (change.sum(1) == 4)
+    rows = np.flatnonzero(four)
+    if len(rows) == 0:
+        return ok, dirs, strength, sign
+    v = vals[rows]
+    idx = np.nonzero(change[rows])[1].reshape(-1, 4)   # sorted per row
+    a = np.take_along_axis(v, idx, 1)
+    b = np.take_along_axis(v, (idx + 1) % N, 1)
+    theta = (idx + a / (a - b)) * (2 * np.pi / N)      # crossing angles, ascending
+    seg = np.diff(np.concatenate([theta, theta[:, :1] + 2 * np.pi], axis=1), axis=1)
+    good = (seg.min(1) >= np.pi / 5) & (seg.max(1) <= np.pi - np.pi / 5)
+    # opposite crossings (nearly) collinear: the two lines through the corner
+    good &= (np.abs(theta[:, 2] - theta[:, 0] - np.pi) <= 0.45) & (np.abs(theta[:, 3] - theta[:, 1] - np.pi) <= 0.45)
+    # every sector clearly on its side: a T-junction (the board border at the median level) has weak ones
+    sector = np.cumsum(np.roll(change[rows], 1, axis=1), axis=1) % 4   # sector id of each sample
+    amp = 0.5 * (v.max(1) - v.min(1))
+    flat = (np.arange(len(rows))[:, None] * 4 + sector).ravel()
+    sums = np.bincount(flat, weights=v.ravel(), minlength=4 * len(rows)).reshape(-1, 4)
+    cnts = np.bincount(flat, minlength=4 * len(rows)).reshape(-1, 4)
+    means = np.abs(sums) / np.maximum(cnts, 1)
+    good &= means.min(1) >= 0.35 * amp
+    # alternating sectors
+    sg = np.sign(sums)
+    good &= (sg[:, 0] == sg[:, 2]) & (sg[:, 1] == sg[:, 3]) & (sg[:, 0] != sg[:, 1])
+    e = np.exp(1j * theta)
+    l1 = np.angle(e[:, 0] - e[:, 2]) % np.pi
+    l2 = np.angle(e[:, 1] - e[:, 3]) % np.pi
+    ok[rows] = good
+    dirs[rows] = np.stack([l1, l2], 1)
+    strength[rows] = np.abs(v).mean(1)
+    sign[rows] = sg[:, 1]
+    return ok, dirs, strength, sign
+
+
+def find_candidates(f: np.ndarray, sigma: float = 1.2, radii=(3.0, 5.0)) -> tuple[Candidates, np.ndarray, np.ndarray]:
+    """Candidates in a normalised image ``f``; also the contrast-normalised smoothed image and the
+    local standard deviation (image units)."""
+    mu, sd = local_contrast(f)
+    # contrast normalisation, but never amplifying flat regions past a few times the noise
+    floor = max(NOISE_FLOOR * image_noise(f), 1e-6)
+    g = cv2.GaussianBlur((f - mu) / np.maximum(sd, floor), (0, 0), sigma)
+    S = saddle_response(g)
+    xy = local_maxima(S, threshold=0.002)
+    best = None
+    for r in radii:
+        ok, dirs, strength, sign = ring_check(g, xy, r)
+        if best is None:
+            best = [ok, dirs, strength, sign]
+        else:
+            take = ok & ~best[0]
+            best[0] = best[0] | ok
+            for arr, new in zip(best[1:], (dirs, strength, sign)):
+                arr[take] = new[take]
+    ok = best[0]
+    return Candidates(xy[ok], best[1][ok], best[2][ok], best[3][ok]), g, sd

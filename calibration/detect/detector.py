@@ -1,0 +1,96 @@
+"""detect_corners(image, board=(W, H)): the heated-checkerboard detector, end to end."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .candidates import find_candidates, normalise
+from .grid import anchor, label, link, orient
+from .refine import levels, refine
+
+MIN_CORNERS = 6
+
+
+@dataclass(frozen=True)
+class Detection:
+    """One image's board: ``corners`` (H*W, 2) in grid order (row j, then column i; top-left first),
+    NaN where a corner was not found; ``level`` (H*W,) mrcal's level (0 best, -1 not found);
+    ``weight`` = 2^-level (0 where not found)."""
+    board: tuple[int, int]
+    corners: np.ndarray
+    level: np.ndarray
+    reason: str = ""
+    candidates: int = 0
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def found(self) -> int:
+        return int(np.sum(np.isfinite(self.corners[:, 0])))
+
+    @property
+    def detected(self) -> bool:
+        return self.found > 0
+
+    @property
+    def complete(self) -> bool:
+        return self.found == self.board[0] * self.board[1]
+
+    @property
+    def weight(self) -> np.ndarray:
+        return np.where(self.level >= 0, 2.0 ** (-self.level.astype(float)), 0.0)
+
+
+def _empty(board, reason, n_cand=0) -> Detection:
+    n = board[0] * board[1]
+    return Detection(board, np.full((n, 2), np.nan), -np.ones(n, int), reason, n_cand)
+
+
+def to_float(image: np.ndarray) -> np.ndarray:
+    img = np.asarray(image)
+    if img.ndim == 3:
+        img = img[..., :3].mean(axis=2) if img.shape[2] >= 3 else img[..., 0]
+    if img.ndim != 2:
+        raise ValueError(f"expected a single-channel image, got shape {img.shape}")
+    return img.astype(np.float32)
+
+
+def detect_corners(image: np.ndarray, board: tuple[int, int] = (10, 7)) -> Detection:
+    """Find the W x H inner corners of a (heated) checkerboard in a thermal image (16-bit counts,
+    8-bit, or float; one channel). Partial and occluded boards give the corners seen, at their board
+    coordinates; corner (0, 0) is the top-left corner as seen in the image (see grid.py)."""
+    W, H = int(board[0]), int(board[1])
+    if W < 2 or H < 2:
+        raise ValueError(f"board {W}x{H}: needs at least 2x2 inner corners")
+    f = normalise(to_float(image))
+    if float(f.max() - f.min()) <= 0:
+        return _empty((W, H), "the image is flat (every pixel the same)")
+    cands, g, local_sd = find_candidates(f)
+    if len(cands.xy) < MIN_CORNERS:
+        return _empty((W, H), "no checkerboard corners found", len(cands.xy))
+    slots = link(cands)
+    idx, ij = label(cands, slots)
+    if len(idx) < MIN_CORNERS:
+        return _empty((W, H), "no grid of corners found", len(cands.xy))
+    xy = cands.xy[idx]
+    ij, why = orient(xy, ij, W, H)
+    if why:
+        return _empty((W, H), why, len(cands.xy))
+    if ij[:, 0].max() < 1 or ij[:, 1].max() < 1:
+        return _empty((W, H), "only one row of corners found", len(cands.xy))
+    ij, why = anchor(g, xy, ij, W, H)
+    if ij is None:
+        return _empty((W, H), why, len(cands.xy))
+    # spacing to the nearest grid neighbour, for window sizes
+    pos = {tuple(k): p for k, p in zip(ij, xy)}
+    spacing = np.array([min([np.linalg.norm(pos[n] - p) for n in
+                             ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)) if n in pos] or [8.0])
+                        for (i, j), p in zip(map(tuple, ij), xy)])
+    fine = refine(f, xy, spacing)
+    ok = np.isfinite(fine[:, 0])
+    corners = np.full((W * H, 2), np.nan)
+    lv = -np.ones(W * H, int)
+    k = ij[:, 1] * W + ij[:, 0]
+    corners[k[ok]] = fine[ok]
+    lv[k[ok]] = levels(f, fine[ok], local_sd)
+    return Detection((W, H), corners, lv, "", len(cands.xy))

@@ -1,0 +1,262 @@
+"""From X-corner candidates to a labelled grid: which candidate is corner (i, j) of the board.
+
+1. Each candidate looks for its nearest neighbour along each of its two edge lines, both ways
+   (four slots); an edge is kept only if both ends choose each other and the neighbouring spacings
+   along that line agree (a missed corner would otherwise make a double step).
+2. A breadth-first walk over those edges labels the candidates with lattice steps, carrying each
+   corner's orientation of its two lines to the next; labels that disagree are dropped.
+3. The largest labelled component becomes the board. Its labels are made right-handed (the board is
+   seen from the front: never a mirrored grid) and turned, among the rotations that fit a W x H
+   board, to the one whose +i steps point most to the image's right: corner (0, 0) is the board's
+   top-left corner as seen in the image. A square board thus has one answer per image; a board held
+   more than 45 deg from upright is reported turned (a rigid symmetry of the corner grid).
+4. A board cut by the image edge or occluded: its offset on the board is anchored by a visible
+   board edge (square centres past the last corner line stop alternating); if neither end of an
+   axis is seen, the offset is ambiguous and the view is dropped rather than guessed.
+"""
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import map_coordinates
+from scipy.spatial import cKDTree
+
+from .candidates import Candidates
+
+ANGLE_TOL = np.radians(20.0)
+LINE_AGREE_TOL = np.radians(25.0)
+SPACING_RATIO = 1.6
+K_NEIGHBOURS = 10
+
+
+@dataclass(frozen=True)
+class Grid:
+    index: np.ndarray        # (m,) candidate index of each labelled corner
+    ij: np.ndarray           # (m, 2) board coordinates (i across, j down)
+    reason: str = ""         # why a view was dropped (empty if kept)
+
+
+def _angle_diff_mod_pi(a, b):
+    d = np.abs((a - b) % np.pi)
+    return np.minimum(d, np.pi - d)
+
+
+def link(c: Candidates) -> np.ndarray:
+    """slots[p, line, side] = neighbour index or -1; side 0 is +direction of the line."""
+    n = len(c.xy)
+    slots = -np.ones((n, 2, 2), dtype=int)
+    if n < 2:
+        return slots
+    tree = cKDTree(c.xy)
+    k = min(K_NEIGHBOURS + 1, n)
+    dist, nb = tree.query(c.xy, k=k)
+    best = np.full((n, 2, 2), np.inf)
+    for col in range(1, k):
+        q = nb[:, col]
+        d = c.xy[q] - c.xy
+        phi = np.arctan2(d[:, 1], d[:, 0])
+        for L in (0, 1):
+            theta = c.dirs[:, L]
+            along = _angle_diff_mod_pi(phi, theta) < ANGLE_TOL
+            # the neighbour's own lines must continue this line
+            agree = np.minimum(_angle_diff_mod_pi(c.dirs[q, 0], theta),
+                               _angle_diff_mod_pi(c.dirs[q, 1], theta)) < LINE_AGREE_TOL
+            side = (np.cos(phi - theta) < 0).astype(int)
+            ok = along & agree
+            for p in np.flatnonzero(ok):
+                s = side[p]
+                if dist[p, col] < best[p, L, s]:
+                    best[p, L, s] = dist[p, col]
+                    slots[p, L, s] = q[p]
+    # mutual choice
+    for p in range(n):
+        for L in (0, 1):
+            for s in (0, 1):
+                q = slots[p, L, s]
+                if q >= 0 and not np.any(slots[q] == p):
+                    slots[p, L, s] = -1
+    # spacing consistency along a line: a double step (missed corner) is twice as long as its neighbour
+    length = np.where(slots >= 0, np.linalg.norm(c.xy[np.maximum(slots, 0)] - c.xy[:, None, None, :], axis=-1), np.nan)
+    for p in range(n):
+        for L in (0, 1):
+            a, b = length[p, L]
+            if np.isfinite(a) and np.isfinite(b) and max(a, b) > SPACING_RATIO * min(a, b):
+                s = 0 if a > b else 1
+                q = slots[p, L, s]
+                slots[p, L, s] = -1
+                slots[q][slots[q] == p] = -1
+    return slots
+
+
+def label(c: Candidates, slots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """BFS labelling of the largest component: (indices, ij) with arbitrary origin and orientation."""
+    n = len(c.xy)
+    degree = (slots >= 0).sum(axis=(1, 2))
+    seen = np.zeros(n, bool)
+    best_idx, best_ij = np.zeros(0, int), np.zeros((0, 2), int)
+    unit = np.stack([np.cos(c.dirs), np.sin(c.dirs)], axis=-1)       # (n, 2 lines, 2)
+    for seed in np.argsort(-degree):
+        if seen[seed] or degree[seed] == 0:
+            continue
+        # axis_of[p, L] = global axis (0 i, 1 j) of line L; orient[p, L] = +1/-1
+        axis_of = {seed: (0, 1)}
+        orient = {seed: (1, 1)}
+        lab = {seed: (0, 0)}
+        conflict = set()
+        queue = deque([seed])
+        seen[seed] = True
+        while queue:
+            p = queue.popleft()
+            for L in (0, 1):
+                for s in (0, 1):
+                    q = slots[p, L, s]
+                    if q < 0:
+                        continue
+                    A = axis_of[p][L]
+                    step = orient[p][L] * (1 if s == 0 else -1)
+                    new = list(lab[p])
+                    new[A] += step
+                    new = tuple(new)
+                    if q in lab:
+                        if lab[q] != new:
+                            conflict.add(q)
+                        continue
+                    # orientation at q: the line through p is L2, its side towards p is s2
+                    where = np.argwhere(slots[q] == p)
+                    if len(where) == 0:
+                        continue
+                    L2, s2 = where[0]
+                    ax = [0, 0]
+                    ori = [0, 0]
+                    ax[L2] = A
+                    ori[L2] = -step * (1 if s2 == 0 else -1)
+                    # the other line: orient along p's direction of the other axis
+                    B = 1 - A
+                    LB = axis_of[p].index(B)
+                    vB = orient[p][LB] * unit[p, LB]
+                    ax[1 - L2] = B
+                    ori[1 - L2] = 1 if float(unit[q, 1 - L2] @ vB) >= 0 else -1
+                    axis_of[q], orient[q], lab[q] = tuple(ax), tuple(ori), new
+                    seen[q] = True
+                    queue.append(q)
+        idx = np.array([k for k in lab if k not in conflict], int)
+        ij = np.array([lab[k] for k in idx], int).reshape(-1, 2)
+        # one candidate per label
+        if len(ij):
+            _, first, counts = np.unique(ij, axis=0, return_index=True, return_counts=True)
+            dup = {tuple(ij[f]) for f, cnt in zip(first, counts) if cnt > 1}
+            keep = np.array([tuple(x) not in dup for x in ij])
+            idx, ij = idx[keep], ij[keep]
+        if len(idx) > len(best_idx):
+            best_idx, best_ij = idx, ij
+    return best_idx, best_ij
+
+
+def _step_vectors(xy: np.ndarray, ij: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean image displacement of a +i step and of a +j step."""
+    pos = {tuple(k): p for k, p in zip(ij, xy)}
+    di, dj = [], []
+    for (i, j), p in pos.items():
+        if (i + 1, j) in pos:
+            di.append(pos[(i + 1, j)] - p)
+        if (i, j + 1) in pos:
+            dj.append(pos[(i, j + 1)] - p)
+    zero = np.zeros(2)
+    return (np.mean(di, axis=0) if di else zero), (np.mean(dj, axis=0) if dj else zero)
+
+
+def orient(xy: np.ndarray, ij: np.ndarray, W: int, H: int) -> tuple[np.ndarray, str]:
+    """Right-handed labels, turned so +i points most to the right among those that fit W x H;
+    returns (ij normalised to start at 0, reason if none fits)."""
+    di, dj = _step_vectors(xy, ij)
+    if di[0] * dj[1] - di[1] * dj[0] < 0:          # mirrored: swap the axes
+        ij = ij[:, ::-1]
+        di, dj = dj, di
+    best, best_score = None, -np.inf
+    for k in range(4):
+        ni = ij[:, 0].max() - ij[:, 0].min() + 1
+        nj = ij[:, 1].max() - ij[:, 1].min() + 1
+        if ni <= W and nj <= H:
+            score = di[0] / (np.linalg.norm(di) + 1e-12)
+            if score > best_score:
+                best, best_score = ij.copy(), score
+        ij = np.stack([ij[:, 1], -ij[:, 0]], axis=1)   # turn 90 deg (keeps handedness)
+        di, dj = dj, -di
+    if best is None:
+        ni = ij[:, 0].max() - ij[:, 0].min() + 1
+        nj = ij[:, 1].max() - ij[:, 1].min() + 1
+        return ij, f"found a {max(ni, nj)}x{min(ni, nj)} grid of corners, larger than the {W}x{H} board"
+    return best - best.min(axis=0), ""
+
+
+def _end_state(g: np.ndarray, pos: dict, axis: int, end: int, n_other: int) -> str:
+    """'closed' if the board visibly ends past the last corner line at ``end`` (0 low, 1 high) of
+    ``axis``: the column of outer squares alternates but the border past it does not; 'open' if the
+    squares go on alternating there (corners were missed, the board goes on); else 'unknown'."""
+    H, W = g.shape
+    line = 0 if end == 0 else max(k[axis] for k in pos)
+    inward = 1 if end == 0 else -1
+    ms, ref, out = [], [], []
+    for m in range(n_other - 1):
+        def P(a, b):
+            key = [0, 0]
+            key[axis] = line + inward * a
+            key[1 - axis] = b
+            return pos.get(tuple(key))
+        p0a, p1a, p0b, p1b = P(0, m), P(1, m), P(0, m + 1), P(1, m + 1)
+        if p0a is None or p1a is None or p0b is None or p1b is None:
+            continue
+        mid = (p0a + p0b) / 2
+        step = ((p0a - p1a) + (p0b - p1b)) / 2        # one square outwards
+        ms.append(m)
+        ref.append(mid + 0.5 * step)                  # centre of the square just past the line
+        out.append(mid + 1.5 * step)                  # centre of the next square, if the board goes on
+    if len(ms) < 2:
+        return "unknown"
+    ms, ref, out = np.array(ms), np.array(ref), np.array(out)
+    ok = np.all((out >= 1) & (out <= [W - 2, H - 2]), axis=1) & np.all((ref >= 1) & (ref <= [W - 2, H - 2]), axis=1)
+    if ok.sum() < 2:
+        return "unknown"
+    ms, ref, out = ms[ok], ref[ok], out[ok]
+    sgn = np.where(ms % 2 == 0, 1.0, -1.0)
+    v_ref = map_coordinates(g, [ref[:, 1], ref[:, 0]], order=1, mode="nearest")
+    v_out = map_coordinates(g, [out[:, 1], out[:, 0]], order=1, mode="nearest")
+    a_ref = abs(np.mean(sgn * (v_ref - v_ref.mean())))
+    a_out = abs(np.mean(sgn * (v_out - v_out.mean())))
+    if a_ref <= 0.2:
+        return "unknown"
+    if a_out < 0.4 * a_ref:
+        return "closed"
+    if a_out > 0.7 * a_ref:
+        return "open"
+    return "unknown"
+
+
+def anchor(g: np.ndarray, xy: np.ndarray, ij: np.ndarray, W: int, H: int) -> tuple[np.ndarray | None, str]:
+    """Place a (possibly partial) grid on the board: add the offsets; None and a reason if unsure."""
+    pos = {tuple(k): p for k, p in zip(ij, xy)}
+    out = ij.copy()
+    for axis, n_board in ((0, W), (1, H)):
+        n_seen = ij[:, axis].max() + 1
+        n_other = ij[:, 1 - axis].max() + 1
+        if n_seen == n_board:
+            # all corners along this axis seen. (Checking that the board ends past them too gave
+            # false alarms near the image edge; a board bigger than --board is caught by orient()
+            # when its extra corners are found, and by the anchoring below when they are not all.)
+            continue
+        lo = _end_state(g, pos, axis, 0, n_other)
+        hi = _end_state(g, pos, axis, 1, n_other)
+        if lo == "closed" and hi != "closed":
+            continue
+        if hi == "closed" and lo != "closed":
+            out[:, axis] += n_board - n_seen
+            continue
+        name = "i (across)" if axis == 0 else "j (down)"
+        if lo == hi == "closed":
+            return None, (f"the board ends after {n_seen} corners along {name}, not {n_board}: "
+                          f"check the board size (or the board is occluded across)")
+        return None, (f"partial board: {n_seen} of {n_board} corners along {name} and neither board edge "
+                      f"seen; cannot tell which corners they are")
+    return out, ""

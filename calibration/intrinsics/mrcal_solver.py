@@ -1,0 +1,261 @@
+"""Solve a single camera's intrinsics with mrcal, in-process, with outliers rejected and named.
+
+The sequence follows mrcal's own calibration tool: a stereographic seed from the nominal focal length
+(board poses by PnP), geometry-only then core-only presolves, then the full model. Differences:
+
+- OPENCV8 starts from a fit to the presolved stereographic lens (lensfit), not from zero
+  distortion, so a 95 deg lens starts close to where it ends.
+- A splined model first gets an OPENCV8-free stereographic core, which is then fixed (as mrcal's
+  tool does: the core is redundant with the spline), and the knots' fov_x covers the measured field.
+- Board poses are re-estimated by PnP through the model solved so far, while that helps.
+- After mrcal's per-corner outlier rejection, whole images whose residuals stand out from the rest
+  (a mis-detected or moved board) are removed by name, and the problem is solved again.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import lensmodels
+from .lensfit import fit_lensmodel, mrcal_unprojector
+from .observations import BoardObservations
+
+
+class SolveError(Exception):
+    """The data cannot be solved (too few boards or corners); ``str()`` says what to do."""
+
+
+MIN_IMAGES = 4            # fewer boards than this cannot pin down a fisheye's intrinsics
+MIN_CORNERS_PER_IMAGE = 8  # a board pose has 6 unknowns; fewer corners than this is not a board
+# An image is an outlier when its RMS residual exceeds both this multiple of the median image's
+# and this absolute floor (pixels): at 0.05-0.3 px corner noise a good board never gets there.
+IMAGE_OUTLIER_FACTOR = 4.0
+IMAGE_OUTLIER_FLOOR_PX = 0.5
+# ... or when mrcal's corner outlier rejection threw out more than this share of its corners
+IMAGE_OUTLIER_CORNER_SHARE = 0.3
+
+
+@dataclass
+class RejectedImage:
+    name: str
+    rms_px: float
+    reason: str
+
+
+@dataclass
+class Solution:
+    lensmodel: str
+    intrinsics: np.ndarray
+    imagersize: tuple[int, int]
+    observations: BoardObservations      # the images used in the final solve
+    optimization_inputs: dict
+    rms_px: float                        # RMS reprojection error over inlier corners
+    per_image_rms_px: np.ndarray         # (N,) over inlier corners
+    residuals: np.ndarray                # (N, H*W, 2) observed - predicted, NaN where not seen
+    inlier: np.ndarray                   # (N, H*W) bool: seen and not rejected
+    rejected_images: list[RejectedImage] = field(default_factory=list)
+    rejected_corners: list[tuple[str, int, int, float]] = field(default_factory=list)  # name, col, row, |res|
+    solver: str = "mrcal"
+    notes: list[str] = field(default_factory=list)
+
+    def cameramodel(self, note: str | None = None):
+        import mrcal
+        kw = dict(optimization_inputs=self.optimization_inputs, icam_intrinsics=0) \
+            if self.optimization_inputs else \
+            dict(intrinsics=(self.lensmodel, self.intrinsics), imagersize=self.imagersize)
+        return mrcal.cameramodel(**kw)
+
+
+def _indices(n: int) -> np.ndarray:
+    return np.column_stack([np.arange(n), np.zeros(n), -np.ones(n)]).astype(np.int32)
+
+
+def _check_enough(obs: BoardObservations) -> None:
+    counts = obs.counts()
+    good = int((counts >= MIN_CORNERS_PER_IMAGE).sum())
+    if good < MIN_IMAGES:
+        raise SolveError(f"only {good} image(s) with at least {MIN_CORNERS_PER_IMAGE} detected corners "
+                         f"({obs.n} with any, {len(obs.missed)} without a board); at least {MIN_IMAGES} are "
+                         f"needed: take more images with the board filling different parts of the image")
+
+
+def predicted(optimization_inputs: dict) -> np.ndarray:
+    """(N, H, W, 2) where the solved model puts every board corner."""
+    import mrcal
+    oi = optimization_inputs
+    obs = oi["observations_board"]
+    _, h, w, _ = obs.shape
+    obj = mrcal.ref_calibration_object(w, h, oi["calibration_object_spacing"],
+                                       calobject_warp=oi.get("calobject_warp"))
+    frames = oi["frames_rt_toref"][oi["indices_frame_camintrinsics_camextrinsics"][:, 0]]
+    pcam = mrcal.transform_point_rt(frames[:, None, None, :], obj[None])
+    return mrcal.project(pcam, oi["lensmodel"], oi["intrinsics"][0])
+
+
+def residual_summary(obs: BoardObservations, optimization_inputs: dict):
+    """residuals (N, H*W, 2), inlier mask (N, H*W), per-image RMS (N,), overall RMS."""
+    q = predicted(optimization_inputs).reshape(obs.n, -1, 2)
+    res = obs.corners - q
+    inlier = obs.seen() & (optimization_inputs["observations_board"][..., 2].reshape(obs.n, -1) > 0)
+    d2 = np.where(inlier, (res ** 2).sum(axis=-1), 0.0)
+    cnt = np.maximum(inlier.sum(axis=1), 1)
+    per_image = np.sqrt(d2.sum(axis=1) / cnt)
+    rms = float(np.sqrt(d2.sum() / max(inlier.sum(), 1)))
+    return np.where(obs.seen()[..., None], res, np.nan), inlier, per_image, rms
+
+
+def _seed(obs: BoardObservations, focal_px: float):
+    import mrcal
+    observations = obs.mrcal_array()
+    idx = np.column_stack([np.arange(obs.n), np.zeros(obs.n)]).astype(np.int32)
+    imagersizes = np.array([obs.imagersize], dtype=np.int32)
+    intrinsics, _, frames = mrcal.seed_stereographic(imagersizes=imagersizes, focal_estimate=focal_px,
+                                                     indices_frame_camera=idx, observations=observations,
+                                                     object_spacing=obs.square_m)
+    return intrinsics, frames
+
+
+def _base_inputs(obs: BoardObservations, lensmodel: str, intrinsics: np.ndarray, frames: np.ndarray) -> dict:
+    return dict(intrinsics=np.atleast_2d(np.asarray(intrinsics, dtype=float)).copy(),
+                extrinsics_rt_fromref=np.zeros((0, 6)), frames_rt_toref=np.asarray(frames, dtype=float).copy(),
+                points=None, observations_board=obs.mrcal_array(),
+                indices_frame_camintrinsics_camextrinsics=_indices(obs.n),
+                observations_point=None, indices_point_camintrinsics_camextrinsics=None,
+                lensmodel=lensmodel, imagersizes=np.array([obs.imagersize], dtype=np.int32),
+                calobject_warp=None, do_optimize_intrinsics_core=True,
+                do_optimize_intrinsics_distortions=True, do_optimize_extrinsics=True,
+                do_optimize_frames=True, do_optimize_calobject_warp=False,
+                calibration_object_spacing=obs.square_m, do_apply_outlier_rejection=False,
+                do_apply_regularization=True, verbose=False)
+
+
+def _stereographic_presolve(obs: BoardObservations, focal_px: float) -> dict:
+    import mrcal
+    intrinsics, frames = _seed(obs, focal_px)
+    oi = _base_inputs(obs, "LENSMODEL_STEREOGRAPHIC", intrinsics, frames)
+    oi.update(do_optimize_intrinsics_core=False, do_optimize_intrinsics_distortions=False,
+              do_apply_regularization=False)
+    mrcal.optimize(**oi)
+    oi.update(do_optimize_intrinsics_core=True)
+    mrcal.optimize(**oi)
+    return oi
+
+
+def horizontal_fov_deg(lensmodel: str, intrinsics: np.ndarray, imagersize: tuple[int, int]) -> float:
+    """The angle between the rays of the left and right edges of the imager, through the centre row."""
+    import mrcal
+    w, h = imagersize
+    cy = float(intrinsics[3])
+    v = mrcal.unproject(np.array([[0.0, cy], [w - 1.0, cy]]), lensmodel, intrinsics, normalize=True)
+    return math.degrees(math.atan2(abs(v[0, 0]), v[0, 2]) + math.atan2(abs(v[1, 0]), v[1, 2]))
+
+
+def _expand(pre: dict, lensmodel: str, imagersize: tuple[int, int]) -> tuple[np.ndarray, bool]:
+    """Intrinsics of ``lensmodel`` seeded from the stereographic presolve; and whether to optimise
+    the core."""
+    import mrcal
+    core = pre["intrinsics"][0]
+    n = mrcal.lensmodel_num_params(lensmodel)
+    if lensmodels.is_splined(lensmodel):
+        # a splined stereographic with zero spline values is exactly this stereographic lens
+        x = np.zeros(n)
+        x[:4] = core
+        return x, False
+    fit = fit_lensmodel(mrcal_unprojector("LENSMODEL_STEREOGRAPHIC", core), imagersize, lensmodel, core)
+    return fit.intrinsics, True
+
+
+def _rms(oi: dict) -> float:
+    import mrcal
+    return float(mrcal.optimize(**oi)["rms_reproj_error__pixels"])
+
+
+def _repose(obs: BoardObservations, oi: dict, rounds: int = 3) -> None:
+    """Board poses seeded through a stereographic lens can hold the solve in a wrong minimum (a
+    fisheye differs from stereographic by tens of pixels at the image edges): re-estimate every
+    pose by PnP through the model solved so far, re-solve, and keep it while the fit improves."""
+    import mrcal
+    idx = np.column_stack([np.arange(obs.n), np.zeros(obs.n)]).astype(np.int32)
+    best = _rms(oi)
+    for _ in range(rounds):
+        saved = {k: np.array(oi[k], copy=True) for k in ("intrinsics", "frames_rt_toref")}
+        try:
+            Rt = mrcal.estimate_monocular_calobject_poses_Rt_tocam(
+                idx, oi["observations_board"], obs.square_m, [(oi["lensmodel"], oi["intrinsics"][0])])
+            oi["frames_rt_toref"] = mrcal.rt_from_Rt(Rt)
+            rms = _rms(oi)
+        except Exception:
+            rms = float("inf")
+        if not rms < 0.99 * best:
+            oi.update(saved)
+            mrcal.optimize(**oi)
+            return
+        best = rms
+
+
+def _final(oi: dict) -> dict:
+    """The full solve: outlier rejection and board warp on, mrcal's regularisation on. (Without
+    regularisation an OPENCV8 fit of a 95 deg lens can run off along its rational degeneracy,
+    numerator and denominator growing together to 1e5, and its JtJ is then singular, so no
+    uncertainty; with it the fit is slightly biased: measured in bench/bench_intrinsics.py.)"""
+    import mrcal
+    # outliers are judged only now: against a half-converged model, the corners at the image's
+    # edges (where a fisheye is hardest) look like outliers and would be thrown away
+    oi.update(do_apply_outlier_rejection=True, calobject_warp=np.zeros(2), do_optimize_calobject_warp=True)
+    mrcal.optimize(**oi)
+    return oi
+
+
+def solve(obs: BoardObservations, *, lensmodel: str | None, focal_px: float,
+          max_image_rejections: int = 3) -> Solution:
+    """Calibrate one camera. ``lensmodel``: a name :func:`lensmodels.resolve` accepts or None for the
+    default; ``focal_px``: the nominal focal length, the seed."""
+    import mrcal
+    keep = obs.counts() >= MIN_CORNERS_PER_IMAGE
+    rejected: list[RejectedImage] = [RejectedImage(nm, float("nan"), f"fewer than {MIN_CORNERS_PER_IMAGE} corners")
+                                     for nm, k in zip(obs.names, keep) if not k]
+    obs = obs.subset(keep)
+    _check_enough(obs)
+
+    pre = _stereographic_presolve(obs, focal_px)
+    if not np.all(np.isfinite(pre["intrinsics"])) or pre["intrinsics"][0, 0] <= 0:
+        raise SolveError("the stereographic presolve diverged: check --board and --square")
+    fov = horizontal_fov_deg("LENSMODEL_STEREOGRAPHIC", pre["intrinsics"][0], obs.imagersize)
+    full_name = lensmodels.resolve(lensmodel, obs.imagersize, fov * 1.05)
+
+    for _round in range(max_image_rejections + 1):
+        intr, opt_core = _expand(pre, full_name, obs.imagersize)
+        oi = _base_inputs(obs, full_name, intr, pre["frames_rt_toref"])
+        oi["do_optimize_intrinsics_core"] = opt_core
+        mrcal.optimize(**oi)     # a first pass without outlier rejection from the fitted seed
+        _repose(obs, oi)
+        _final(oi)
+        res, inlier, per_image, rms = residual_summary(obs, oi)
+        med = float(np.median(per_image))
+        share = 1.0 - inlier.sum(axis=1) / np.maximum(obs.seen().sum(axis=1), 1)
+        bad = ((per_image > IMAGE_OUTLIER_FACTOR * med) & (per_image > IMAGE_OUTLIER_FLOOR_PX)) | \
+            (share > IMAGE_OUTLIER_CORNER_SHARE)
+        if not bad.any() or obs.n - bad.sum() < MIN_IMAGES or _round == max_image_rejections:
+            break
+        # one at a time: one bad board inflates the others' residuals
+        worst = int(np.argmax(np.where(bad, per_image / max(med, 1e-9) + 10 * share, -1)))
+        rms_all = float(np.sqrt(np.nanmean(np.sum(res[worst] ** 2, axis=-1))))
+        rejected.append(RejectedImage(obs.names[worst], rms_all,
+                                      f"{100 * share[worst]:.0f}% of its corners are outliers, RMS residual "
+                                      f"{rms_all:.2f} px vs median image {med:.2f} px (a mis-detected or "
+                                      f"moving board)"))
+        keep = np.ones(obs.n, bool)
+        keep[worst] = False
+        obs = obs.subset(keep)
+        pre["frames_rt_toref"] = oi["frames_rt_toref"][keep]
+        pre["observations_board"] = obs.mrcal_array()
+
+    rejected_corners = []
+    outl = obs.seen() & ~inlier
+    w = obs.board[0]
+    for i, k in zip(*np.nonzero(outl)):
+        rejected_corners.append((obs.names[i], int(k % w), int(k // w), float(np.linalg.norm(res[i, k]))))
+    return Solution(full_name, oi["intrinsics"][0].copy(), obs.imagersize, obs, oi, rms, per_image, res,
+                    inlier, rejected, rejected_corners)

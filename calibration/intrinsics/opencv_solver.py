@@ -1,0 +1,90 @@
+"""The second solver: OpenCV's fisheye calibration (Kannala-Brandt, cv2.fisheye.calibrate).
+
+Seeded with the nominal focal length; CALIB_CHECK_COND is off (it rejects exactly the boards near
+the image corners a fisheye needs). Outliers are handled like the mrcal solver: corners whose
+residual is far outside the rest are dropped, then whole images that stand out, each named.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import kannala_brandt as kb
+from .mrcal_solver import (IMAGE_OUTLIER_FACTOR, IMAGE_OUTLIER_FLOOR_PX, MIN_CORNERS_PER_IMAGE,
+                           MIN_IMAGES, RejectedImage, Solution, SolveError, _check_enough)
+from .observations import BoardObservations
+
+CORNER_OUTLIER_SIGMAS = 5.0    # a corner further than this many robust sigmas is an outlier
+CORNER_OUTLIER_FLOOR_PX = 0.5
+
+
+def _calibrate(obs: BoardObservations, inlier: np.ndarray, focal_px: float):
+    import cv2
+    board_pts = obs.board_points_m()
+    objp, imgp = [], []
+    for i in range(obs.n):
+        m = inlier[i]
+        objp.append(board_pts[m].reshape(1, -1, 3).astype(np.float64))
+        imgp.append(obs.corners[i, m].reshape(1, -1, 2).astype(np.float64))
+    w, h = obs.imagersize
+    K = np.array([[focal_px, 0, (w - 1) / 2], [0, focal_px, (h - 1) / 2], [0, 0, 1.0]])
+    D = np.zeros((4, 1))
+    flags = cv2.fisheye.CALIB_RECOMPUTE_EXTRINSIC | cv2.fisheye.CALIB_FIX_SKEW | cv2.fisheye.CALIB_USE_INTRINSIC_GUESS
+    crit = (cv2.TERM_CRITERIA_COUNT + cv2.TERM_CRITERIA_EPS, 200, 1e-12)
+    try:
+        _, K, D, rvecs, tvecs = cv2.fisheye.calibrate(objp, imgp, (w, h), K, D, flags=flags, criteria=crit)
+    except cv2.error as exc:
+        raise SolveError(f"cv2.fisheye.calibrate failed ({str(exc).strip().splitlines()[-1]}); "
+                         f"try --solver mrcal") from None
+    params = np.array([K[0, 0], K[1, 1], K[0, 2], K[1, 2], *np.ravel(D)])
+    # residuals of every seen corner (outliers included, so they can be judged)
+    res = np.full(obs.corners.shape, np.nan)
+    for i in range(obs.n):
+        m = obs.seen()[i]
+        R = cv2.Rodrigues(rvecs[i])[0]
+        pc = board_pts[m] @ R.T + np.ravel(tvecs[i])
+        res[i, m] = obs.corners[i, m] - kb.project(pc, params)
+    return params, res, np.array([np.concatenate([np.ravel(r), np.ravel(t)]) for r, t in zip(rvecs, tvecs)])
+
+
+def _per_image(res: np.ndarray, inlier: np.ndarray):
+    d2 = np.where(inlier, np.nansum(res ** 2, axis=-1), 0.0)
+    per = np.sqrt(d2.sum(axis=1) / np.maximum(inlier.sum(axis=1), 1))
+    return per, float(np.sqrt(d2.sum() / max(inlier.sum(), 1)))
+
+
+def solve(obs: BoardObservations, *, focal_px: float, max_image_rejections: int = 3) -> Solution:
+    keep = obs.counts() >= MIN_CORNERS_PER_IMAGE
+    rejected = [RejectedImage(nm, float("nan"), f"fewer than {MIN_CORNERS_PER_IMAGE} corners")
+                for nm, k in zip(obs.names, keep) if not k]
+    obs = obs.subset(keep)
+    _check_enough(obs)
+    inlier = obs.seen()
+    for _round in range(max_image_rejections + 1):
+        params, res, poses = _calibrate(obs, inlier, focal_px)
+        mag = np.linalg.norm(res, axis=-1)
+        sigma = 1.4826 * np.nanmedian(np.abs(mag[inlier])) if inlier.any() else 0.0
+        outl = obs.seen() & (mag > max(CORNER_OUTLIER_SIGMAS * sigma, CORNER_OUTLIER_FLOOR_PX))
+        new_inlier = obs.seen() & ~outl
+        if (new_inlier != inlier).any():
+            inlier = new_inlier
+            params, res, poses = _calibrate(obs, inlier, focal_px)
+        per, rms = _per_image(res, inlier)
+        med = float(np.median(per))
+        bad = (per > IMAGE_OUTLIER_FACTOR * med) & (per > IMAGE_OUTLIER_FLOOR_PX)
+        if not bad.any() or obs.n - 1 < MIN_IMAGES or _round == max_image_rejections:
+            break
+        worst = int(np.argmax(np.where(bad, per, -1)))
+        rejected.append(RejectedImage(obs.names[worst], float(per[worst]),
+                                      f"RMS residual {per[worst]:.2f} px vs median {med:.2f} px "
+                                      f"(a mis-detected or moving board)"))
+        k = np.ones(obs.n, bool)
+        k[worst] = False
+        obs, inlier = obs.subset(k), inlier[k]
+    w = obs.board[0]
+    corners = [(obs.names[i], int(k % w), int(k // w), float(np.linalg.norm(res[i, k])))
+               for i, k in zip(*np.nonzero(obs.seen() & ~inlier))]
+    sol = Solution(kb.NAME, params, obs.imagersize, obs, {}, rms, per, res, inlier, rejected, corners,
+                   solver="opencv")
+    sol.notes.append("OpenCV fisheye (Kannala-Brandt); no projection uncertainty (mrcal computes that "
+                     "from its own solve only)")
+    return sol

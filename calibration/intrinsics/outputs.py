@@ -1,0 +1,83 @@
+"""Everything ``calibrate thermal`` writes, from a solution, as {file name: text}: the .cameramodel,
+the OpenCV / ROS / Kalibr files, report.html; plus the verdict and a JSON-able summary."""
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import formats
+from ..report import analysis, html
+from ..report.verdict import Verdict, judge
+from . import kannala_brandt as kb
+from .mrcal_solver import Solution
+
+
+@dataclass
+class Outputs:
+    files: dict[str, str]
+    summary: dict
+    verdict: Verdict
+
+
+def _cameramodel_text(solution: Solution, note: str, rational: formats.Representation | None):
+    import mrcal
+    if solution.lensmodel == kb.NAME:
+        # mrcal has no Kannala-Brandt: write the nearest OPENCV8, without optimization_inputs
+        p = np.concatenate([[rational.K[0, 0], rational.K[1, 1], rational.K[0, 2], rational.K[1, 2]], rational.D])
+        model = mrcal.cameramodel(intrinsics=("LENSMODEL_OPENCV8", p), imagersize=solution.imagersize)
+    else:
+        model = solution.cameramodel()
+    buf = io.StringIO()
+    model.write(buf, note=note)
+    return buf.getvalue(), model
+
+
+def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: str) -> Outputs:
+    lens = formats.Lens(solution.lensmodel, solution.intrinsics, solution.imagersize)
+    ros = formats.nearest_for_ros(lens)
+    kal = formats.nearest_kalibr(lens)
+    rational = formats.representation(lens, "rational_polynomial") if solution.lensmodel == kb.NAME else None
+    note = (f"thermal intrinsics from calibrate thermal ({solution.solver}, {solution.lensmodel}), "
+            f"rig hash {rig_hash[:12]}")
+    cm_text, model = _cameramodel_text(solution, note, rational)
+
+    obs = solution.observations
+    cov = analysis.coverage(obs.corners, solution.inlier, solution.imagersize)
+    unc = analysis.uncertainty(model) if solution.optimization_inputs else None
+    verdict = judge(region_counts=cov.region_counts(), rms_px=solution.rms_px, n_images=obs.n,
+                    n_rejected_images=len(solution.rejected_images),
+                    uncertainty_central_px=None if unc is None else unc.central_max_px,
+                    uncertainty_max_px=None if unc is None else unc.max_px)
+    fmt = {"ROS camera_info": ros.summary(), "Kalibr camchain": kal.summary(),
+           "OpenCV YAML": ros.summary()}
+    if rational is not None:
+        fmt["thermal.cameramodel"] = rational.summary()
+    summary = dict(
+        solver=solution.solver, lensmodel=solution.lensmodel,
+        intrinsics=[float(x) for x in solution.intrinsics],
+        intrinsics_text=" ".join(f"{x:.6g}" for x in solution.intrinsics),
+        imagersize=list(solution.imagersize), board=list(obs.board), square_m=obs.square_m,
+        rms_px=solution.rms_px, n_images_used=obs.n, n_missed=len(obs.missed), missed=list(obs.missed),
+        n_rejected_images=len(solution.rejected_images),
+        rejected_images=[dict(name=r.name, rms_px=r.rms_px, reason=r.reason) for r in solution.rejected_images],
+        n_corners=int(solution.inlier.sum()), n_rejected_corners=len(solution.rejected_corners),
+        rejected_corners=solution.rejected_corners,
+        per_image=[dict(name=n, corners=int(c), rms_px=float(r))
+                   for n, c, r in zip(obs.names, solution.inlier.sum(axis=1), solution.per_image_rms_px)],
+        regions=cov.region_counts(),
+        uncertainty=None if unc is None else dict(central_max_px=unc.central_max_px, max_px=unc.max_px,
+                                                  observed_noise_px=unc.observed_noise_px),
+        formats=fmt, notes=list(solution.notes), rig_hash=rig_hash, verdict=verdict.to_dict())
+    files = {
+        "thermal.cameramodel": cm_text,
+        "thermal_opencv.yaml": formats.opencv_yaml(ros, solution.imagersize, camera_name=camera_name,
+                                                   rms_px=solution.rms_px),
+        "thermal_camera_info.yaml": formats.ros_camera_info(ros, solution.imagersize, camera_name=camera_name),
+        "kalibr_camchain.yaml": formats.kalibr_camchain(kal, solution.imagersize,
+                                                        rostopic=f"/{camera_name}/image_raw"),
+        "corners.vnl": corners_vnl,
+        "report.html": html.render(summary, verdict, html.plots(solution, cov, unc)),
+    }
+    return Outputs(files, summary, verdict)

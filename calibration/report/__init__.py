@@ -1,0 +1,2 @@
+"""The calibration report: what the data covers, how uncertain the solved lens is, and a verdict
+(:mod:`.analysis`, :mod:`.verdict`), drawn as inline SVG (:mod:`.svg`) into report.html (:mod:`.html`)."""

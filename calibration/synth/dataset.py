@@ -1,0 +1,81 @@
+"""A synthetic calibration set on disk: NNN.png (16-bit counts), truth.cameramodel, truth.json."""
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from platform_tools import atomic
+from platform_tools.progress import progress
+
+from .board import Board
+from .difficulty import level
+from .lens import Lens
+from .poses import sample_view
+from .render import render_image
+from .sensor import Sensor
+
+
+def default_lens(camera: str = "thermal_left", rig=None) -> Lens:
+    from platform_tools.rig import load_rig
+
+    from .lens import nominal_thermal_lens
+    return nominal_thermal_lens(rig or load_rig(), camera)
+
+
+def rt_from_R_t(R: np.ndarray, t: np.ndarray) -> list[float]:
+    import mrcal
+    return [float(x) for x in np.concatenate([mrcal.r_from_R(np.ascontiguousarray(R)), t])]
+
+
+def render_dataset(out_dir, n: int = 40, difficulty: str = "real", board=(10, 7), square: float = 0.04,
+                   seed: int = 0, lens=None, *, camera: str = "thermal_left", rig=None,
+                   show_progress: bool = True) -> dict:
+    """Render ``n`` images of a ``board`` (W, H inner corners, ``square`` metres) through ``lens``
+    (default: the nominal thermal lens of ``camera`` in the rig description) into ``out_dir``,
+    replaced whole and atomically. Returns the truth (also written to truth.json)."""
+    diff = level(difficulty)
+    W, H = int(board[0]), int(board[1])
+    if W < 2 or H < 2:
+        raise ValueError(f"board {W}x{H}: needs at least 2x2 inner corners")
+    if not (n >= 1):
+        raise ValueError(f"n={n}: render at least one image")
+    if not (square > 0):
+        raise ValueError(f"square={square}: the square size must be positive (metres)")
+    lens = Lens.from_any(lens) if lens is not None else default_lens(camera, rig)
+    b = Board(W, H, float(square))
+    rng = np.random.default_rng(seed)
+    sensor = Sensor.make(rng, (lens.imagersize[1], lens.imagersize[0]), diff)
+    images = []
+    out_dir = Path(out_dir)
+    with atomic.OutputDir(out_dir) as stage:
+        items = range(n)
+        if show_progress:
+            items = progress(items, desc=f"rendering {difficulty}", total=n, unit="image")
+        for k in items:
+            irng = np.random.default_rng([seed, k])
+            view = sample_view(irng, lens, b, diff)
+            img, occluded, look = render_image(irng, lens, b, view, diff, sensor)
+            name = f"{k:03d}.png"
+            ok, png = cv2.imencode(".png", img)
+            if not ok:
+                raise RuntimeError(f"cannot encode {name}")
+            (stage / name).write_bytes(png.tobytes())
+            corners = [None if not np.isfinite(q[0]) else [float(q[0]), float(q[1])] for q in view.corners_px]
+            images.append({"file": name, "rt_cam_board": rt_from_R_t(view.R, view.t), "corners": corners,
+                           "visible": view.visible, "occluded": [int(i) for i in np.flatnonzero(occluded)],
+                           "polarity": "cooled" if look.polarity < 0 else "heated",
+                           "contrast_k": round(look.contrast_k, 3)})
+        truth = {"lensmodel": lens.lensmodel, "intrinsics": list(lens.intrinsics),
+                 "imagersize": list(lens.imagersize),
+                 "board": {"width": W, "height": H, "square_m": float(square)},
+                 "difficulty": difficulty, "seed": seed, "images": images}
+        (stage / "truth.json").write_text(json.dumps(truth, indent=1))
+        buf = io.StringIO()
+        lens.cameramodel().write(buf, note=f"the exact lens the synthetic {difficulty} images (seed {seed}) "
+                                           f"were rendered through")
+        (stage / "truth.cameramodel").write_text(buf.getvalue())
+    return truth

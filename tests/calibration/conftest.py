@@ -1,0 +1,21 @@
+"""Fixtures shared by the calibration tests: small synthetic sets, rendered once per session."""
+from __future__ import annotations
+
+import pytest
+
+
+@pytest.fixture(scope="session")
+def synth_set(tmp_path_factory):
+    """synth_set(difficulty, n, seed, board=(10, 7)) -> folder with NNN.png, truth.json, truth.cameramodel."""
+    from calibration.synth import render_dataset
+    cache = {}
+
+    def make(difficulty: str = "easy", n: int = 4, seed: int = 0, board=(10, 7), square: float = 0.04):
+        key = (difficulty, n, seed, tuple(board), square)
+        if key not in cache:
+            out = tmp_path_factory.mktemp(f"synth_{difficulty}") / "set"
+            render_dataset(out, n=n, difficulty=difficulty, board=board, square=square, seed=seed,
+                           show_progress=False)
+            cache[key] = out
+        return cache[key]
+    return make

@@ -1,0 +1,218 @@
+"""The heated-checkerboard detector, against the synthetic truth, and `calibrate detect`."""
+from __future__ import annotations
+
+import json
+import subprocess
+
+import cv2
+import mrcal
+import numpy as np
+import pytest
+
+from calibration.corners_io import BoardCorners, read_corners, write_corners
+from calibration.detect import detect_corners
+
+
+def truth_of(folder):
+    truth = json.loads((folder / "truth.json").read_text())
+    return truth, [np.array([c if c is not None else [np.nan, np.nan] for c in im["corners"]]) for im in truth["images"]]
+
+
+def image(folder, name):
+    return cv2.imread(str(folder / name), cv2.IMREAD_UNCHANGED)
+
+
+def handedness(corners, W, H):
+    g = corners.reshape(H, W, 2)
+    di = np.nanmean(g[:, 1:] - g[:, :-1], axis=(0, 1))
+    dj = np.nanmean(g[1:] - g[:-1], axis=(0, 1))
+    return di[0] * dj[1] - di[1] * dj[0]
+
+
+def test_easy_boards_found_exactly(synth_set):
+    """Noise-free-ish images: every corner found at its true position; this also bounds the renderer's
+    own bias (supersampling) well below the 0.08 px target."""
+    folder = synth_set("easy", n=4, seed=0)
+    truth, corners = truth_of(folder)
+    errs = []
+    for im, q in zip(truth["images"], corners):
+        det = detect_corners(image(folder, im["file"]), (10, 7))
+        assert det.complete, det.reason
+        errs.append(np.linalg.norm(det.corners - q, axis=1))
+        assert (det.level >= 0).all() and det.weight.max() <= 1
+    rms = float(np.sqrt(np.mean(np.concatenate(errs) ** 2)))
+    assert rms < 0.04, rms
+
+
+def test_real_boards_accuracy_and_no_wrong_labels(synth_set):
+    folder = synth_set("real", n=6, seed=5)
+    truth, corners = truth_of(folder)
+    errs = []
+    for im, q in zip(truth["images"], corners):
+        det = detect_corners(image(folder, im["file"]), (10, 7))
+        e = np.linalg.norm(det.corners - q, axis=1)
+        found = np.isfinite(e)
+        # a corner is never reported at another corner's board coordinates
+        assert not np.any(e[found] > 1.0), (im["file"], np.nanmax(e))
+        # and never where the truth says it is outside the image
+        assert not np.any(found & np.isnan(q[:, 0]))
+        errs.append(e[found])
+    rms = float(np.sqrt(np.mean(np.concatenate(errs) ** 2)))
+    assert rms < 0.08, rms
+
+
+def test_8bit_images_work(synth_set):
+    folder = synth_set("easy", n=4, seed=0)
+    truth, corners = truth_of(folder)
+    img = image(folder, "000.png").astype(float)
+    lo, hi = np.percentile(img, [0.5, 99.5])
+    img8 = np.clip((img - lo) / (hi - lo) * 255, 0, 255).astype(np.uint8)
+    det = detect_corners(img8, (10, 7))
+    assert det.complete
+    assert np.sqrt(np.mean(np.sum((det.corners - corners[0]) ** 2, axis=1))) < 0.1
+
+
+def test_turned_image_keeps_top_left_convention(synth_set):
+    """Turned upside down, the board's corner (0, 0) is the other corner: the top-left one in the image."""
+    folder = synth_set("easy", n=4, seed=0)
+    truth, corners = truth_of(folder)
+    img = image(folder, "001.png")
+    H, W = img.shape
+    det = detect_corners(img[::-1, ::-1].copy(), (10, 7))
+    assert det.complete
+    expect = np.stack([W - 1 - corners[1][:, 0], H - 1 - corners[1][:, 1]], axis=1)[::-1]
+    assert np.abs(det.corners - expect).max() < 0.2
+
+
+def test_mirrored_image_never_gives_a_mirrored_grid(synth_set):
+    folder = synth_set("easy", n=4, seed=0)
+    img = image(folder, "002.png")
+    for im in (img, img[:, ::-1].copy(), img[::-1].copy()):
+        det = detect_corners(im, (10, 7))
+        assert det.complete and handedness(det.corners, 10, 7) > 0
+
+
+def test_partial_board_gets_board_coordinates(synth_set):
+    """A board running out of the image: the corners found are at their true board coordinates."""
+    folder = synth_set("real", n=12, seed=3)
+    truth, corners = truth_of(folder)
+    partial = [(im, q) for im, q in zip(truth["images"], corners) if im["visible"] < 70]
+    assert partial
+    n_found = 0
+    for im, q in partial:
+        det = detect_corners(image(folder, im["file"]), (10, 7))
+        e = np.linalg.norm(det.corners - q, axis=1)
+        assert not np.any(e[np.isfinite(e)] > 1.0)
+        assert not np.any(np.isfinite(det.corners[:, 0]) & np.isnan(q[:, 0]))
+        n_found += det.found
+    assert n_found > 0
+
+
+def test_square_board_and_other_sizes(synth_set):
+    folder = synth_set("easy", n=2, seed=1, board=(7, 7))
+    truth, corners = truth_of(folder)
+    for im, q in zip(truth["images"], corners):
+        det = detect_corners(image(folder, im["file"]), (7, 7))
+        assert det.complete
+        assert np.abs(det.corners - q).max() < 0.3
+
+
+def test_wrong_board_size_is_refused_not_guessed(synth_set):
+    folder = synth_set("easy", n=4, seed=0)
+    # (7, 10) is not wrong: a 10x7 board turned 90 deg is a 7x10 board (a rigid symmetry of the grid)
+    for board in ((9, 6), (11, 8)):
+        for name in ("000.png", "001.png"):
+            det = detect_corners(image(folder, name), board)
+            assert not det.detected, (board, name)
+            assert det.reason
+
+
+def test_nothing_to_find():
+    rng = np.random.default_rng(0)
+    noise = (7000 + rng.normal(0, 3, (512, 640))).astype(np.uint16)
+    assert not detect_corners(noise, (10, 7)).detected
+    assert not detect_corners(np.full((512, 640), 7000, np.uint16), (10, 7)).detected
+
+
+# ----------------------------------------------------------------------------- corners.vnl
+def test_corners_file_round_trip(tmp_path):
+    c = np.array([[1.5, 2.25], [np.nan, np.nan], [3.0, 4.0], [5.0, 6.0]])
+    rows = [BoardCorners("a.png", c, np.array([0, -1, 2, 1])), BoardCorners("b.png", None, None)]
+    path = write_corners(tmp_path / "corners.vnl", rows)
+    text = path.read_text().splitlines()
+    assert text[0] == "# filename x y level"
+    assert text[2] == "a.png - - -" and text[-1] == "b.png - - -" and len(text) == 6
+    back = read_corners(path, n_corners=4)
+    assert back[0].filename == "a.png" and np.allclose(back[0].corners, c, equal_nan=True)
+    assert list(back[0].level) == [0, -1, 2, 1] and back[1].corners is None
+    w = write_corners(tmp_path / "w.vnl", rows, weights=True).read_text().splitlines()
+    assert w[0] == "# filename x y weight" and w[3].endswith(" 0.25")
+
+
+@pytest.mark.slow
+def test_mrcal_calibrates_from_our_corners_file(synth_set, calibrate, tmp_path):
+    """`calibrate detect` output read by mrcal-calibrate-cameras --corners-cache: the solve runs and
+    recovers the true lens."""
+    folder = synth_set("easy", n=10, seed=21)
+    r = calibrate("detect", "--images", str(folder), "--board", "10x7", "--out", str(tmp_path / "det"))
+    assert r.returncode == 0, r.stderr
+    truth, _ = truth_of(folder)
+    cmd = ["mrcal-calibrate-cameras", "--corners-cache", str(tmp_path / "det" / "corners.vnl"),
+           "--lensmodel", "LENSMODEL_OPENCV8", "--focal", "408", "--imagersize", "640", "512",
+           "--object-spacing", "0.04", "--object-width-n", "10", "--object-height-n", "7",
+           "--outdir", str(tmp_path), "*.png"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    model = mrcal.cameramodel(str(tmp_path / "camera-0.cameramodel"))
+    fx, fy, cx, cy = model.intrinsics()[1][:4]
+    assert fx == pytest.approx(truth["intrinsics"][0], rel=0.01)
+    assert cx == pytest.approx(truth["intrinsics"][2], abs=2.0)
+
+
+# ----------------------------------------------------------------------------- the command
+def _one_line_error(r):
+    assert r.returncode == 2, (r.returncode, r.stderr)
+    assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    return r.stderr
+
+
+def test_detect_command_writes_corners_and_summary(synth_set, calibrate, tmp_path):
+    folder = synth_set("easy", n=4, seed=0)
+    r = calibrate("detect", "--images", str(folder / "*.png"), "--board", "10x7", "--out", str(tmp_path / "d"),
+                  "--json")
+    assert r.returncode == 0, r.stderr
+    summary = json.loads(r.stdout)
+    assert summary["images"] == 4 and summary["complete"] == 4
+    rows = read_corners(tmp_path / "d" / "corners.vnl", n_corners=70)
+    assert [b.filename for b in rows] == ["000.png", "001.png", "002.png", "003.png"]
+    assert json.loads((tmp_path / "d" / "detections.json").read_text())["detected"] == 4
+
+
+def test_detect_command_bad_inputs(calibrate, tmp_path, synth_set):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    out = tmp_path / "out"
+    assert "empty" in _one_line_error(calibrate("detect", "--images", str(empty), "--board", "10x7", "--out", str(out)))
+    notimg = tmp_path / "notimg"
+    notimg.mkdir()
+    (notimg / "readme.txt").write_text("hello")
+    assert "no images" in _one_line_error(calibrate("detect", "--images", str(notimg), "--board", "10x7",
+                                                    "--out", str(out)))
+    corrupt = tmp_path / "corrupt"
+    corrupt.mkdir()
+    good = (synth_set("easy", n=4, seed=0) / "000.png").read_bytes()
+    (corrupt / "000.png").write_bytes(good)
+    (corrupt / "001.png").write_bytes(good[:200])
+    err = _one_line_error(calibrate("detect", "--images", str(corrupt), "--board", "10x7", "--out", str(out)))
+    assert "001.png" in err and "corrupt" in err
+    sat = tmp_path / "sat"
+    sat.mkdir()
+    cv2.imwrite(str(sat / "000.png"), np.full((512, 640), 65535, np.uint16))
+    assert "saturated" in _one_line_error(calibrate("detect", "--images", str(sat), "--board", "10x7",
+                                                    "--out", str(out)))
+    err = _one_line_error(calibrate("detect", "--images", str(synth_set("easy", n=4, seed=0)), "--board", "9x6",
+                                    "--out", str(out)))
+    assert "9x6" in err and "larger than" in err
+    assert "--board" in _one_line_error(calibrate("detect", "--images", str(empty), "--board", "ten",
+                                                  "--out", str(out)))
+    assert not out.exists()

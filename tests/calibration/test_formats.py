@@ -1,0 +1,77 @@
+"""The exported files project like the solved lens, read back by the tools that use them."""
+from __future__ import annotations
+
+import cv2
+import mrcal
+import numpy as np
+import yaml
+
+from calibration import formats
+from calibration.intrinsics import kannala_brandt as kb
+from calibration.intrinsics.synthetic_corners import fisheye_truth
+
+SIZE = (640, 512)
+
+
+def rays(n=200, seed=0):
+    q = np.random.default_rng(seed).uniform([0, 0], [639, 511], (n, 2))
+    return q
+
+
+def test_opencv8_to_ros_rational_polynomial_is_exact_and_projects_like_mrcal(tmp_path):
+    lm, intr = fisheye_truth(408.3, SIZE)
+    lens = formats.Lens(lm, intr, SIZE)
+    rep = formats.nearest_for_ros(lens)
+    assert rep.family == "rational_polynomial" and rep.exact
+    doc = yaml.safe_load(formats.ros_camera_info(rep, SIZE, camera_name="thermal"))
+    assert doc["distortion_model"] == "rational_polynomial" and doc["image_width"] == 640
+    K = np.array(doc["camera_matrix"]["data"]).reshape(3, 3)
+    D = np.array(doc["distortion_coefficients"]["data"])
+    assert len(D) == 8 and len(doc["projection_matrix"]["data"]) == 12
+    v = mrcal.unproject(rays(), lm, intr)
+    q_cv, _ = cv2.projectPoints(v, np.zeros(3), np.zeros(3), K, D)
+    np.testing.assert_allclose(q_cv[:, 0], mrcal.project(v, lm, intr), atol=1e-6)
+    # OpenCV YAML read back by cv2.FileStorage
+    p = tmp_path / "c.yaml"
+    p.write_text(formats.opencv_yaml(rep, SIZE, camera_name="thermal", rms_px=0.1))
+    fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_READ)
+    np.testing.assert_allclose(fs.getNode("camera_matrix").mat(), K)
+    np.testing.assert_allclose(fs.getNode("distortion_coefficients").mat().ravel(), D)
+    assert fs.getNode("distortion_model").string() == "rational_polynomial"
+
+
+def test_kannala_brandt_exports_exactly_as_fisheye_and_equidistant(tmp_path):
+    p = np.array([405.0, 404.0, 321.0, 255.0, 0.02, -0.004, 0.001, -0.0002])
+    lens = formats.Lens(kb.NAME, p, SIZE)
+    rep = formats.nearest_for_ros(lens)
+    assert rep.family == "equidistant" and rep.exact
+    f = tmp_path / "c.yaml"
+    f.write_text(formats.opencv_yaml(rep, SIZE, camera_name="t"))
+    fs = cv2.FileStorage(str(f), cv2.FILE_STORAGE_READ)
+    assert fs.getNode("distortion_model").string() == "fisheye"
+    K, D = fs.getNode("camera_matrix").mat(), fs.getNode("distortion_coefficients").mat().ravel()
+    v = kb.unproject(rays(), p)
+    q, _ = cv2.fisheye.projectPoints(v[None], np.zeros(3), np.zeros(3), K, D)
+    np.testing.assert_allclose(q[0], kb.project(v, p), atol=1e-6)
+    kal = yaml.safe_load(formats.kalibr_camchain(formats.nearest_kalibr(lens), SIZE, rostopic="/t/image_raw"))
+    cam = kal["cam0"]
+    assert cam["camera_model"] == "pinhole" and cam["distortion_model"] == "equidistant"
+    np.testing.assert_allclose(cam["intrinsics"] + cam["distortion_coeffs"], p)
+
+
+def test_splined_has_no_ros_equivalent_so_the_nearest_fit_is_reported():
+    lm, intr = fisheye_truth(408.3, SIZE)
+    sp = "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=12_Ny=10_fov_x_deg=100"
+    from calibration.intrinsics.lensfit import fit_lensmodel, mrcal_unprojector
+    fit = fit_lensmodel(mrcal_unprojector(lm, intr), SIZE, sp, np.r_[intr[:4]], fix_core=False)
+    lens = formats.Lens(sp, fit.intrinsics, SIZE)
+    rep = formats.nearest_for_ros(lens)
+    assert not rep.exact and rep.fit.rms_px < 0.5
+    text = formats.ros_camera_info(rep, SIZE, camera_name="thermal")
+    assert "no" in text.splitlines()[0] and "equivalent" in text.splitlines()[0]
+    # the fit really is close: project through the representation and compare with the splined lens
+    v = mrcal.unproject(rays(), sp, fit.intrinsics)
+    lens2 = formats.Lens({"rational_polynomial": "LENSMODEL_OPENCV8"}.get(rep.family, kb.NAME),
+                         np.r_[rep.K[0, 0], rep.K[1, 1], rep.K[0, 2], rep.K[1, 2], rep.D], SIZE)
+    d = np.linalg.norm(lens2.projector()(v) - mrcal.project(v, sp, fit.intrinsics), axis=-1)
+    assert np.sqrt(np.mean(d ** 2)) < 2 * rep.fit.rms_px + 0.05

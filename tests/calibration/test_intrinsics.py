@@ -1,0 +1,93 @@
+"""The intrinsics solvers on corners projected through a known lens (no images: fast)."""
+from __future__ import annotations
+
+import mrcal
+import numpy as np
+import pytest
+
+from calibration.intrinsics import SolveError, kannala_brandt as kb, lensmodels, mrcal_solver, opencv_solver
+from calibration.intrinsics.synthetic_corners import fisheye_truth, simulate
+from calibration.validate import compare, compare_models
+
+SIZE = (640, 512)
+F = 408.3
+
+
+@pytest.fixture(scope="module")
+def truth():
+    return fisheye_truth(F, SIZE)
+
+
+@pytest.fixture(scope="module")
+def corners(truth):
+    return simulate(*truth, SIZE, n=16, noise_px=0.05, seed=2)
+
+
+def truth_model(truth):
+    return mrcal.cameramodel(intrinsics=truth, imagersize=SIZE)
+
+
+def test_mrcal_opencv8_recovers_the_lens(truth, corners):
+    sol = mrcal_solver.solve(corners.observations, lensmodel=None, focal_px=F * 1.05)   # seed 5% off
+    assert sol.lensmodel == "LENSMODEL_OPENCV8"
+    assert sol.rms_px < 0.15                       # noise 0.05 px per axis
+    c = compare_models(sol.cameramodel(), truth_model(truth))
+    assert c.central_rms_px < 0.2, c.summary()
+    assert abs(sol.intrinsics[0] - truth[1][0]) < 3
+    # the model carries what mrcal needs for uncertainty
+    assert sol.cameramodel().optimization_inputs() is not None
+
+
+def test_outlier_image_and_corner_are_rejected_and_named(truth, corners):
+    obs = corners.observations.subset(np.arange(corners.observations.n))
+    bad = 3
+    seen = np.flatnonzero(obs.seen()[bad])
+    rng = np.random.default_rng(5)
+    obs.corners[bad, seen] += rng.normal(0, 2.0, (len(seen), 2))   # a board that moved: smeared corners
+    k = np.flatnonzero(obs.seen()[5])[7]
+    obs.corners[5, k] += np.array([6.0, 6.0])               # one wild corner
+    sol = mrcal_solver.solve(obs, lensmodel="opencv8", focal_px=F)
+    assert [r.name for r in sol.rejected_images] == [obs.names[bad]]
+    w = obs.board[0]
+    assert (obs.names[5], int(k % w), int(k // w)) in [c[:3] for c in sol.rejected_corners]
+    assert obs.names[bad] not in sol.observations.names
+    c = compare_models(sol.cameramodel(), truth_model(truth))
+    assert c.central_rms_px < 0.3
+
+
+def test_opencv_fisheye_solver(truth, corners):
+    sol = opencv_solver.solve(corners.observations, focal_px=F)
+    assert sol.lensmodel == kb.NAME and sol.solver == "opencv"
+    c = compare(lambda v: kb.project(v, sol.intrinsics),
+                lambda q: mrcal.unproject(q, *truth, normalize=True), SIZE)
+    assert c.rms_px < 0.2, c.summary()
+
+
+def test_too_few_images_is_a_solve_error(corners):
+    few = corners.observations.subset([0, 1, 2])
+    with pytest.raises(SolveError, match="at least"):
+        mrcal_solver.solve(few, lensmodel=None, focal_px=F)
+    with pytest.raises(SolveError, match="at least"):
+        opencv_solver.solve(few, focal_px=F)
+
+
+def test_lens_model_names():
+    assert lensmodels.resolve(None, SIZE, 95) == "LENSMODEL_OPENCV8"
+    sp = lensmodels.resolve("splined", SIZE, 95.2)
+    meta = mrcal.lensmodel_metadata_and_config(sp)
+    assert meta["fov_x_deg"] == 96 and meta["Nx"] / meta["Ny"] == pytest.approx(640 / 512, rel=0.1)
+    assert lensmodels.resolve("LENSMODEL_OPENCV4", SIZE, 95) == "LENSMODEL_OPENCV4"
+    with pytest.raises(lensmodels.LensModelError, match="not an mrcal lens model"):
+        lensmodels.resolve("fisheye62", SIZE, 95)
+
+
+def test_kannala_brandt_matches_opencv():
+    import cv2
+    p = np.array([400, 401, 320, 250, 0.05, -0.01, 0.002, -0.0003])
+    v = np.random.default_rng(0).normal(size=(50, 3))
+    v[:, 2] = np.abs(v[:, 2]) + 0.3
+    K = np.array([[p[0], 0, p[2]], [0, p[1], p[3]], [0, 0, 1.0]])
+    q_cv, _ = cv2.fisheye.projectPoints(v[None], np.zeros(3), np.zeros(3), K, p[4:])
+    np.testing.assert_allclose(kb.project(v, p), q_cv[0], atol=1e-9)
+    np.testing.assert_allclose(kb.unproject(kb.project(v, p), p), v / np.linalg.norm(v, axis=1, keepdims=True),
+                               atol=1e-9)
