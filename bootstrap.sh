@@ -19,10 +19,13 @@ cd "$(dirname "$0")"
 #   python3-dev build-essential  compile wheels that have no binary for this Python
 #   libgl1 libglib2.0-0     shared libraries the CadQuery/OCP wheels load
 #   chromium chromium-driver  the real browser the generated web pages are tested in
+#   shellcheck docker-compose  check the generated on-device files: shell entry scripts, and the
+#                           compose file through `docker-compose config` (no Docker engine needed)
 DEBIAN_PACKAGES=(
     python3-venv python3-mrcal mrcal mrgingham python3-numpy
     python3-dev build-essential libgl1 libglib2.0-0
     chromium chromium-driver
+    shellcheck docker-compose
 )
 
 say() { printf 'bootstrap: %s\n' "$*" >&2; }

@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 from typing import Sequence
 
-from . import boson_cmd, rig_cmd
+from . import boson_cmd, doctor_cmd, firmware_cmd, record_cmd, rig_cmd, simulate_cmd
 
 #: subcommand modules, in the order --help lists them
-COMMANDS = [rig_cmd, boson_cmd]
+COMMANDS = [rig_cmd, boson_cmd, firmware_cmd, doctor_cmd, record_cmd, simulate_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -331,6 +331,62 @@ class Processing:
     ffc_margin_frames: Annotated[int, Ge(0)]
 
 
+# ----------------------------------------------------------------------------- on-device stack (issue 8)
+@dataclass(frozen=True)
+class Topics:
+    """ROS 2 topics the rig publishes and records. The ZED names follow zed-ros2-wrapper
+    (/<camera_name>/zed_node/...); the thermal ones are this project's."""
+    zed_left: str
+    zed_right: str
+    zed_depth: str
+    zed_imu: str
+    thermal_left: str
+    thermal_right: str
+    thermal_left_status: str
+    thermal_right_status: str
+
+
+@dataclass(frozen=True)
+class Images:
+    """Container images of the compose stack (built for L4T on the Orin)."""
+    zed: str
+    thermal: str
+    tools: str
+
+
+@dataclass(frozen=True)
+class Watchdog:
+    #: stop the recording cleanly when the data drive has less than this free
+    stop_free_gb: Annotated[float, Ge(0)]
+    check_period_s: Annotated[float, Gt(0)]
+
+
+@dataclass(frozen=True)
+class OnDevice:
+    """The generated on-device configuration (firmware/) and the recorder service."""
+    install_dir: str
+    compose_project: str
+    ros_distro: Literal["humble", "iron", "jazzy"]
+    ros_domain_id: Annotated[int, Ge(0), Le(232)]
+    images: Images
+    topics: Topics
+    #: zed-ros2-wrapper camera_name (its node namespace)
+    zed_camera_name: str
+    #: zed-ros2-wrapper general.pub_downscale_factor: raw HD1200 stereo is beyond what rosbag2 writes
+    zed_pub_downscale_factor: Annotated[float, Ge(1)]
+    zed_depth_mode: Literal["NONE", "PERFORMANCE", "QUALITY", "ULTRA", "NEURAL"]
+    #: Boson telemetry rows appended to each frame (640x512 becomes 640x514)
+    thermal_telemetry_rows: Annotated[int, Ge(0)]
+    gpio_chips: tuple[str, ...]
+    #: the button pulls the pin to ground when pressed
+    button_active_low: bool
+    #: after SIGINT and stop_grace_s, SIGTERM then this long before SIGKILL
+    recorder_term_grace_s: Annotated[float, Gt(0)]
+    #: how long the pre-flight watches the Boson frame counters advance
+    trigger_watch_s: Annotated[float, Gt(0)]
+    watchdog: Watchdog
+
+
 # ----------------------------------------------------------------------------- the whole rig
 @dataclass(frozen=True)
 class RigDescription:
@@ -345,3 +401,4 @@ class RigDescription:
     sync: Sync
     recording: Recording
     processing: Processing
+    on_device: OnDevice

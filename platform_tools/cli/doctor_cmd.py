@@ -1,0 +1,73 @@
+"""`platform_tools doctor`: the recorder's pre-flight checks on demand, as a table or JSON."""
+from __future__ import annotations
+
+import argparse
+import signal
+import threading
+from pathlib import Path
+
+from ..device.preflight import Report, run_preflight
+from .common import CheckFailed, add_output_options, add_rig_options, print_json, rig_from_args
+
+
+def add_preflight_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("pre-flight")
+    g.add_argument("--output-dir", metavar="DIR", type=Path,
+                   help="where recordings go (default: recording.output_dir)")
+    g.add_argument("--no-boson", action="store_true",
+                   help="skip the checks that talk to the Bosons (reported as skipped)")
+    g.add_argument("--dev-dir", metavar="DIR", type=Path, default=Path("/dev"),
+                   help="where the udev names of the cameras are (default /dev)")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("doctor", help="pre-flight checks: data drive, free space, cameras, trigger, sync mode",
+                       description="Run the checks the recorder runs before every recording: the output folder "
+                                   "is on the data drive (not the eMMC), enough free space, both Bosons present "
+                                   "and answering with the expected serial numbers, their frame counters "
+                                   "advancing at the trigger rate, their sync mode as configured.",
+                       epilog="Exit 0 when every check passes (or is skipped), 1 when one fails.")
+    add_rig_options(p)
+    add_output_options(p)
+    add_preflight_options(p)
+    p.add_argument("--every", metavar="S", type=float,
+                   help="repeat every S seconds until stopped, printing when the result changes")
+    p.set_defaults(handler=cmd_doctor)
+
+
+def _table(report: Report) -> str:
+    rows = [f"{c.status:8s} {c.name:16s} {c.detail}" for c in report.checks]
+    return "\n".join([f"{'status':8s} {'check':16s} detail"] + rows)
+
+
+def _once(args, rig) -> Report:
+    return run_preflight(rig, args.output_dir, boson=not args.no_boson, dev_dir=args.dev_dir)
+
+
+def cmd_doctor(args: argparse.Namespace) -> int:
+    rig = rig_from_args(args)
+    if args.every:
+        return _watch(args, rig)
+    report = _once(args, rig)
+    if args.json:
+        print_json(report.to_dict())
+    else:
+        print(_table(report))
+    if not report.ok:
+        raise CheckFailed(f"{len(report.failed())} check(s) failed: " + ", ".join(c.name for c in report.failed()))
+    return 0
+
+
+def _watch(args, rig) -> int:
+    stop = threading.Event()
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(sig, lambda *_: stop.set())
+    last = None
+    while not stop.is_set():
+        report = _once(args, rig)
+        key = [(c.name, c.status) for c in report.checks]
+        if key != last:
+            print_json(report.to_dict()) if args.json else print(_table(report), flush=True)
+            last = key
+        stop.wait(args.every)
+    return 0

@@ -1,0 +1,104 @@
+"""Write a simulated recording as the rig would: a rosbag2 folder with an MCAP of ROS 2 CDR messages
+(the rig's topics and frame ids), its metadata.yaml, and truth.json listing what was injected."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import yaml
+from mcap_ros2.writer import Writer
+
+from .. import atomic
+from ..progress import progress
+from ..rig import Rig
+from . import msgs, scenes
+from .timeline import SimParams, Timeline, build, ffc_state
+
+LATENCY_NS = {"image": 6_000_000, "imu": 1_000_000, "status": 2_000_000}
+
+
+def _sizes(rig: Rig, scale: float) -> dict[str, tuple[int, int]]:
+    zed = rig.camera_model(rig.desc.sensors.zed_x.camera_model)
+    th = rig.camera_model(rig.desc.sensors.thermal.camera_model)
+    down = rig.desc.on_device.zed_pub_downscale_factor
+    return {"zed": (max(8, int(zed.width_px / down * scale)), max(8, int(zed.height_px / down * scale))),
+            "thermal": (max(8, int(th.width_px * scale)), max(8, int(th.height_px * scale)))}
+
+
+def _events(tl: Timeline) -> list[tuple[int, str, object]]:
+    ev = [(f.stamp_ns + LATENCY_NS["image"], "frame", f) for f in tl.frames]
+    ev += [(t + LATENCY_NS["imu"], "imu", t) for t in tl.imu_stamps_ns]
+    ev += [(t + LATENCY_NS["status"], "status", t) for t in tl.status_ns]
+    ev.sort(key=lambda e: (e[0], e[1]))
+    return ev
+
+
+def simulate(rig: Rig, out: Path, params: SimParams, scale: float = 0.25) -> dict:
+    tl = build(rig, params)
+    topics = rig.desc.on_device.topics
+    sizes = _sizes(rig, scale)
+    rng = np.random.default_rng(params.seed + 1)
+    counts: dict[str, int] = {}
+    with atomic.OutputDir(out) as stage:
+        bag = stage / "bag"
+        bag.mkdir()
+        with open(bag / "bag_0.mcap", "wb") as f:
+            w = Writer(f)
+            schema = {n: w.register_msgdef(*msgs.msgdef(n)) for n in (
+                "sensor_msgs/Image", "sensor_msgs/CompressedImage", "sensor_msgs/Imu",
+                "diagnostic_msgs/DiagnosticArray")}
+            last_thermal: dict[str, np.ndarray] = {}
+
+            def put(topic: str, typ: str, msg: dict, log_ns: int) -> None:
+                w.write_message(topic, schema[typ], msg, log_time=log_ns, publish_time=log_ns,
+                                sequence=counts.get(topic, 0))
+                counts[topic] = counts.get(topic, 0) + 1
+
+            events = _events(tl)
+            for log_ns, kind, item in progress(events, desc="simulate-rig", unit="msg"):
+                if kind == "frame":
+                    t_s = (item.index / tl.rate_hz)
+                    side = item.camera.split("_")[1]
+                    shift = 0.0 if side == "left" else 0.15
+                    frame_id = f"{item.camera}_optical" if item.camera.startswith("thermal") else \
+                        f"{rig.desc.on_device.zed_camera_name}_{side}_camera_optical_frame"
+                    if item.camera.startswith("thermal"):
+                        if item.frozen and item.camera in last_thermal:
+                            px = last_thermal[item.camera]
+                        else:
+                            px = scenes.thermal(*sizes["thermal"], t_s, shift, rng)
+                            last_thermal[item.camera] = px
+                        put(getattr(topics, item.camera), "sensor_msgs/Image",
+                            msgs.image(item.stamp_ns, frame_id, px, "mono16"), log_ns)
+                    else:
+                        put(getattr(topics, item.camera), "sensor_msgs/CompressedImage",
+                            msgs.compressed_image(item.stamp_ns, frame_id,
+                                                  scenes.zed_jpeg(*sizes["zed"], t_s, shift, rng)), log_ns)
+                        if side == "left":
+                            put(topics.zed_depth, "sensor_msgs/Image",
+                                msgs.image(item.stamp_ns, frame_id, scenes.depth(*sizes["zed"]), "32FC1"), log_ns)
+                elif kind == "imu":
+                    put(topics.zed_imu, "sensor_msgs/Imu",
+                        msgs.imu(item, f"{rig.desc.on_device.zed_camera_name}_imu_link",
+                                 rng.normal(0, 0.01, 3), (0.0, 0.0, 9.81) + rng.normal(0, 0.05, 3)), log_ns)
+                else:
+                    for side in ("left", "right"):
+                        cam = f"thermal_{side}"
+                        state = ffc_state(tl, cam, item)
+                        put(getattr(topics, f"{cam}_status"), "diagnostic_msgs/DiagnosticArray",
+                            msgs.diagnostic(item, cam, str(getattr(rig.desc.sensors.thermal, side).serial),
+                                            {"ffc_status": state, "ffc_in_progress": int(state == 2)}), log_ns)
+            w.finish()
+        start, end = events[0][0], events[-1][0]
+        (bag / "metadata.yaml").write_text(yaml.safe_dump({"rosbag2_bagfile_information": {
+            "version": 5, "storage_identifier": "mcap", "relative_file_paths": ["bag_0.mcap"],
+            "duration": {"nanoseconds": end - start}, "starting_time": {"nanoseconds_since_epoch": start},
+            "message_count": sum(counts.values()),
+            "topics_with_message_count": [{"topic_metadata": {"name": t, "serialization_format": "cdr"},
+                                           "message_count": c} for t, c in counts.items()]}}, sort_keys=False))
+        truth = tl.truth() | {"rig_hash": rig.hash, "topics": counts, "image_sizes": sizes, "scale": scale,
+                              "units": "times in ns since the epoch (true clock unless noted); offsets in ms "
+                                       "after the trigger; dropped: trigger pulse numbers"}
+        (stage / "truth.json").write_text(json.dumps(truth, indent=2) + "\n")
+    return truth
