@@ -1,0 +1,363 @@
+"""`cad/build.py check`: every check of the assembly, each returning a :class:`CheckResult` with a
+readable detail. A failed check makes the command exit 1.
+
+Interference is measured, not assumed: every pair of parts whose boxes overlap is intersected, and the
+overlap volume is compared with what the joint that placed them intends (an insert melts
+``melt_volume`` of plastic; a screw's thread fills its tapped hole). An intended overlap that measures
+more than intended fails too, so a real clash cannot hide behind the allow-list.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import cadquery as cq
+import numpy as np
+from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+
+from platform_tools.progress import progress
+
+from .assembly import PRINT_SETUPS, Assembly, Node
+from .design import fov_half_angles_deg
+from .geom import Bounds, bounds_of, box
+from .parts.common import on_bed
+from .vendor.fasteners import Insert
+
+CONTACT_MM3 = 0.01       # an overlap below this is a touch, not a clash
+TOL_REL, TOL_ABS = 0.05, 0.5
+
+
+@dataclass
+class CheckResult:
+    name: str
+    ok: bool
+    summary: str
+    details: list[str] = field(default_factory=list)
+    data: dict = field(default_factory=dict)
+
+
+def _bounds(asm: Assembly, n: Node) -> Bounds:
+    return bounds_of(n.shape(asm.cache))
+
+
+def check_valid(asm: Assembly) -> CheckResult:
+    bad = []
+    for n in asm.nodes:
+        s = n.shape(asm.cache)
+        if not s.isValid() or s.Volume() <= 0 or len(s.Solids()) != 1:
+            bad.append(f"{n.name} ({n.part_id}): valid={s.isValid()} volume={s.Volume():.2f} solids={len(s.Solids())}")
+    return CheckResult("valid solids", not bad, f"{len(asm.nodes) - len(bad)}/{len(asm.nodes)} parts are one valid solid", bad)
+
+
+def intended_overlaps(asm: Assembly) -> dict[frozenset, tuple[float, str]]:
+    """Overlaps the design means, by node pair: (expected volume mm^3, why)."""
+    out: dict[frozenset, tuple[float, str]] = {}
+    rig = asm.rig
+    ins = Insert.from_rig(rig, rig.desc.enclosure.insert, "M3")
+    for j in asm.layout.joints:
+        screw = f"screw_{j.name}"
+        d = j.diameter_mm
+        if j.kind == "insert":
+            out[frozenset((f"insert_{j.name}", j.host))] = (ins.melt_volume_mm3(), "heat-set insert melted into its hole")
+            out[frozenset((screw, f"insert_{j.name}"))] = (0.0, "screw in its insert")
+        elif j.kind == "tapped":
+            tap = 0.85 * d if j.host.startswith("heat_sink") else 0.0
+            out[frozenset((screw, j.host))] = (math.pi / 4 * (d * d - tap * tap) * j.engagement_mm,
+                                               f"thread engaged {j.engagement_mm:.1f} mm in a tapped hole")
+        else:
+            pilot = rig.part(j.screw_id).dims["pilot_hole_diameter_mm"].value
+            out[frozenset((screw, j.host))] = (math.pi / 4 * (d * d - pilot * pilot) * j.engagement_mm,
+                                               "self-tapping thread cut into the plastic")
+    return out
+
+
+def check_interference(asm: Assembly) -> CheckResult:
+    nodes = asm.nodes
+    boxes = {n.name: _bounds(asm, n) for n in nodes}
+    intended = intended_overlaps(asm)
+    pairs = [(a, b) for i, a in enumerate(nodes) for b in nodes[i + 1:] if boxes[a.name].overlaps(boxes[b.name], 1e-6)]
+    clashes, allowed, seen = [], [], set()
+    for a, b in progress(pairs, desc="interference"):
+        key = frozenset((a.name, b.name))
+        common = a.shape(asm.cache).intersect(b.shape(asm.cache))
+        v = common.Volume() if common.Solids() else 0.0
+        if key in intended:
+            exp, why = intended[key]
+            seen.add(key)
+            ok = abs(v - exp) <= max(TOL_ABS, TOL_REL * exp)
+            allowed.append(f"{a.name} / {b.name}: {v:.2f} mm^3 (intended {exp:.2f}: {why})" + ("" if ok else "  <-- MISMATCH"))
+            if not ok:
+                clashes.append(f"{a.name} / {b.name}: intended overlap measures {v:.2f} mm^3, expected {exp:.2f} ({why})")
+        elif v > CONTACT_MM3:
+            clashes.append(f"{a.name} ({a.part_id}) / {b.name} ({b.part_id}): {v:.2f} mm^3 overlap")
+    missing = [f"{'/'.join(sorted(k))}: intended overlap not found (the parts do not meet)" for k in intended
+               if k not in seen and intended[k][0] > 0]
+    problems = clashes + missing
+    return CheckResult("interference", not problems,
+                       f"{len(pairs)} pairs with touching boxes; {len(clashes)} clashes; "
+                       f"{len(allowed)} intended overlaps measured", problems + ["intended:"] + allowed[:400],
+                       dict(pairs=len(pairs)))
+
+
+def min_wall_of(shape: cq.Shape, samples: int = 3, where: list | None = None) -> float:
+    """Thinnest material found by casting rays inward from sample points on every face."""
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.BRepClass import BRepClass_FaceClassifier
+    from OCP.BRepLProp import BRepLProp_SLProps
+    from OCP.gp import gp_Lin, gp_Dir, gp_Pnt, gp_Pnt2d
+    from OCP.IntCurvesFace import IntCurvesFace_ShapeIntersector
+    from OCP.TopAbs import TopAbs_IN, TopAbs_REVERSED
+    inter = IntCurvesFace_ShapeIntersector()
+    inter.Load(shape.wrapped, 1e-6)
+    best = math.inf
+    for face in shape.Faces():
+        ad = BRepAdaptor_Surface(face.wrapped)
+        u0, u1, v0, v1 = ad.FirstUParameter(), ad.LastUParameter(), ad.FirstVParameter(), ad.LastVParameter()
+        for i in range(samples):
+            for k in range(samples):
+                u = u0 + (i + 0.5) / samples * (u1 - u0)
+                v = v0 + (k + 0.5) / samples * (v1 - v0)
+                if BRepClass_FaceClassifier(face.wrapped, gp_Pnt2d(u, v), 1e-7).State() != TopAbs_IN:
+                    continue
+                props = BRepLProp_SLProps(ad, u, v, 1, 1e-6)
+                if not props.IsNormalDefined():
+                    continue
+                nrm = props.Normal()
+                if face.wrapped.Orientation() == TopAbs_REVERSED:
+                    nrm.Reverse()
+                p = props.Value()
+                d = gp_Dir(-nrm.X(), -nrm.Y(), -nrm.Z())
+                start = gp_Pnt(p.X() + d.X() * 1e-4, p.Y() + d.Y() * 1e-4, p.Z() + d.Z() * 1e-4)
+                inter.Perform(gp_Lin(start, d), 0.0, 1e4)
+                if inter.IsDone() and inter.NbPnt() > 0:
+                    dist = min(inter.WParameter(j) for j in range(1, inter.NbPnt() + 1)) + 1e-4
+                    if dist < best and where is not None:
+                        where[:] = [(round(p.X(), 2), round(p.Y(), 2), round(p.Z(), 2))]
+                    best = min(best, dist)
+    return best
+
+
+def check_min_wall(asm: Assembly) -> CheckResult:
+    p = asm.rig.desc.printing.printer
+    need = p.nozzle_mm * p.min_wall_nozzles
+    details, bad, data = [], [], {}
+    for pid, n in asm.printed().items():
+        if n.category != "printed":
+            continue
+        where: list = []
+        t = min_wall_of(n.local_shape(asm.cache), where=where)
+        data[pid] = round(t, 2)
+        line = f"{pid}: thinnest wall {t:.2f} mm at {where[0] if where else '?'} (part frame)"
+        details.append(line)
+        if t < need - 1e-3:
+            bad.append(line + f" < {need:g} mm")
+    return CheckResult("minimum wall", not bad, f"every printed wall >= {need:g} mm ({p.min_wall_nozzles:g} x {p.nozzle_mm:g} mm nozzle)"
+                       if not bad else f"{len(bad)} parts have walls under {need:g} mm", bad + details, data)
+
+
+def distance(a: cq.Shape, b: cq.Shape) -> float:
+    d = BRepExtrema_DistShapeShape(a.wrapped, b.wrapped)
+    d.Perform()
+    return d.Value()
+
+
+def check_clearances(asm: Assembly) -> CheckResult:
+    gap = asm.rig.desc.enclosure.heat_sink_gap_mm
+    sh = lambda name: asm.node(name).shape(asm.cache)
+    walls = ["case_lower", "case_lid"]
+    pairs = [("heat_sink_left", "heat_sink_right")]
+    for side in ("left", "right"):
+        pairs += [(f"heat_sink_{side}", w) for w in walls] + [(f"fan_{side}", w) for w in walls]
+        pairs += [(f"heat_sink_{side}", f"fan_{o}") for o in ("left", "right")]
+    details, bad = [], []
+    for a, b in pairs:
+        d = distance(sh(a), sh(b))
+        line = f"{a} to {b}: {d:.2f} mm"
+        details.append(line)
+        if d < gap - 1e-6:
+            bad.append(line + f" < {gap:g} mm (enclosure.heat_sink_gap_mm)")
+    return CheckResult("heat sink / fan / wall clearances", not bad, f"all >= {gap:g} mm" if not bad else "too close",
+                       bad + details)
+
+
+def check_bed(asm: Assembly) -> CheckResult:
+    bed = asm.rig.desc.printing.printer.bed_mm
+    details, bad = [], []
+    for pid, n in asm.printed().items():
+        if n.category != "printed":
+            continue
+        s, _ = on_bed(n.local_shape(asm.cache), PRINT_SETUPS[pid], bed)
+        bb = s.BoundingBox()
+        size = (bb.xlen, bb.ylen, bb.zlen)
+        fits = all(a <= b + 1e-6 for a, b in zip(size, bed))
+        line = f"{pid}: {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} mm in its print orientation"
+        details.append(line)
+        if not fits:
+            bad.append(line + f" > bed {bed[0]:g} x {bed[1]:g} x {bed[2]:g}")
+    return CheckResult("print bed", not bad, "every printed part fits the bed" if not bad else "parts exceed the bed",
+                       bad + details)
+
+
+def frustum(apex: np.ndarray, R: np.ndarray, half_h: float, half_v: float, near: float, far: float) -> cq.Shape:
+    """A view frustum from ``near`` to ``far`` along the optical z axis (optical frame R columns)."""
+    def rect(dist):
+        hx, hy = dist * math.tan(math.radians(half_h)), dist * math.tan(math.radians(half_v))
+        pts = [apex + R @ np.array([sx * hx, sy * hy, dist]) for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+        return cq.Wire.makePolygon([cq.Vector(*p) for p in pts], close=True)
+    return cq.Solid.makeLoft([rect(near), rect(far)], True)
+
+
+def camera_frusta(asm: Assembly) -> dict[str, tuple[cq.Shape, list[str]]]:
+    """Each camera's frustum and the nodes that belong to that camera (excluded from its test)."""
+    from .assembly import camera_frames
+    lay = asm.layout
+    halves = fov_half_angles_deg(lay)
+    frames = camera_frames(asm)
+    out = {}
+    for name, T in frames.items():
+        if name.startswith("zed"):
+            hh, hv = halves["zed_x"]
+            near = lay.zed.front_mm + 0.05
+            own = ["zed_x"]
+        else:
+            hh, hv = halves["thermal"]
+            near = lay.lens.front_mm + 0.05
+            side = name.split("_")[1]
+            own = [f"boson_{side}", f"boson_lens_{side}"]
+            # a fisheye sees a cone: its diagonal half angle all round holds the whole image
+            r0, r1 = near * math.tan(math.radians(hh)), lay.c.fov_length_mm * math.tan(math.radians(hh))
+            axis = T.R[:, 2]
+            out[name] = (cq.Solid.makeCone(r0, r1, lay.c.fov_length_mm - near, cq.Vector(*(T.t + near * axis)),
+                                           cq.Vector(*axis)), own)
+            continue
+        out[name] = (frustum(T.t, T.R, hh, hv, near, lay.c.fov_length_mm), own)
+    return out
+
+
+def check_fov(asm: Assembly, extra: list[tuple[str, cq.Shape]] = ()) -> CheckResult:
+    details, bad = [], []
+    for cam, (fr, own) in camera_frusta(asm).items():
+        fb = bounds_of(fr)
+        hits = []
+        items = [(n.name, n.shape(asm.cache)) for n in asm.nodes if n.name not in own] + list(extra)
+        for name, s in items:
+            if not bounds_of(s).overlaps(fb):
+                continue
+            c = s.intersect(fr)
+            v = c.Volume() if c.Solids() else 0.0
+            if v > CONTACT_MM3:
+                hits.append(f"{name} ({v:.1f} mm^3)")
+        details.append(f"{cam}: " + (", ".join(hits) if hits else "clear"))
+        if hits:
+            bad.append(f"{cam}'s field of view is obstructed by " + ", ".join(hits))
+    h = fov_half_angles_deg(asm.layout)
+    return CheckResult("fields of view", not bad,
+                       f"ZED X {2 * h['zed_x'][0]:.0f} x {2 * h['zed_x'][1]:.0f} deg and Boson {2 * h['thermal'][0]:.0f} deg "
+                       f"(diagonal) frusta to {asm.layout.c.fov_length_mm:g} mm are clear" if not bad else "obstructed",
+                       bad + details)
+
+
+def check_battery(asm: Assembly, extra: list[tuple[str, cq.Shape]] = ()) -> CheckResult:
+    lay = asm.layout
+    bat = asm.node("makita_battery")
+    b = _bounds(asm, bat)
+    travel = lay.battery.size[0] + 5.0
+    d = np.asarray(lay.battery.slide_direction)
+    lo = np.minimum(np.array(b.lo), np.array(b.lo) + d * travel)
+    hi = np.maximum(np.array(b.hi), np.array(b.hi) + d * travel)
+    sweep = box(Bounds(tuple(lo + 0.01), tuple(hi - 0.01)))
+    hits = []
+    items = [(n.name, n.shape(asm.cache)) for n in asm.nodes if n.name not in ("makita_battery", "makita_adapter")]
+    for name, s in items + list(extra):
+        if not bounds_of(s).overlaps(bounds_of(sweep)):
+            continue
+        c = s.intersect(sweep)
+        v = c.Volume() if c.Solids() else 0.0
+        if v > CONTACT_MM3:
+            hits.append(f"{name} ({v:.1f} mm^3)")
+    return CheckResult("battery slides out", not hits,
+                       f"the battery's {travel:.0f} mm path along {tuple(d)} is clear" if not hits else
+                       "the battery's path is blocked by " + ", ".join(hits), hits)
+
+
+def check_vents(asm: Assembly) -> CheckResult:
+    lay = asm.layout
+    shell = box(lay.outer).cut(box(lay.interior))
+    area = 0.0
+    for v in lay.vents:
+        c = shell.intersect(box(v))
+        area += (c.Volume() if c.Solids() else 0.0) / lay.wall
+    fans = 2 * lay.fan_part.inlet_area_mm2
+    ratio = lay.rig.desc.enclosure.vents.min_area_ratio
+    ok = area >= fans * ratio
+    return CheckResult("vent area", ok, f"{len(lay.vents)} slots, {area:.0f} mm^2 open; fan inlets {fans:.0f} mm^2 x "
+                       f"{ratio:g} = {fans * ratio:.0f} mm^2 needed", [] if ok else
+                       ["enclosure.vents: add slots or make them longer"], dict(area_mm2=area, needed_mm2=fans * ratio))
+
+
+def mass_properties(asm: Assembly) -> dict:
+    rig = asm.rig
+    total, moment = 0.0, np.zeros(3)
+    rows = []
+    for n in asm.nodes:
+        s = n.shape(asm.cache)
+        com = np.array(cq.Shape.centerOfMass(s).toTuple())
+        if n.category == "printed":
+            m = s.Volume() / 1000 * rig.desc.printing.printer.density_g_cm3
+        elif n.category == "machined":
+            m = s.Volume() / 1000 * rig.desc.enclosure.heat_sink.density_g_cm3
+        else:
+            m = rig.part(n.part_id).mass_g.value
+        rows.append((n.name, m))
+        total += m
+        moment += m * com
+    com = moment / total
+    return dict(mass_g=total, com_mm=com.tolist(), heaviest=sorted(rows, key=lambda r: -r[1])[:5])
+
+
+def check_mass(asm: Assembly) -> CheckResult:
+    mp = mass_properties(asm)
+    com = np.array(mp["com_mm"])
+    g = asm.layout.handle_geometry()
+    details = [f"total {mp['mass_g'] / 1000:.2f} kg; centre of mass at x {com[0]:.1f}, y {com[1]:.1f}, z {com[2]:.1f} mm (rig frame)"]
+    bad = []
+    for name, pose in asm.layout.handle_poses.items():
+        grip = pose.apply(np.array([0.0, 0.0, g.post_height + g.grip_d / 2]))
+        axis = pose.rotate(np.array([1.0, 0, 0]))
+        rel = com - grip
+        along = float(rel @ axis)
+        details.append(f"handle_{name}: grip centre at ({grip[0]:.1f}, {grip[1]:.1f}, {grip[2]:.1f}); centre of mass "
+                       f"{along:+.1f} mm along the grip, {np.linalg.norm(rel - along * axis):.1f} mm from its axis")
+        if name == "top" and abs(along) > g.grip_length / 2:
+            bad.append(f"the centre of mass is {abs(along):.0f} mm along the top grip, beyond its "
+                       f"{g.grip_length / 2:.0f} mm half length: the rig tips when carried")
+    details += [f"heaviest: {n} {m:.0f} g" for n, m in mp["heaviest"]]
+    return CheckResult("mass and balance", not bad, f"{mp['mass_g'] / 1000:.2f} kg, centre of mass under the top grip"
+                       if not bad else "unbalanced", bad + details, mp)
+
+
+def check_estimates(asm: Assembly) -> CheckResult:
+    est = asm.rig.estimates()
+    return CheckResult("estimates (information)", True, f"{len(est)} dimensions are estimates: measure real parts",
+                       [f"{e.path} = {e.value:g}" + (f" ({e.note})" if e.note else "") for e in est])
+
+
+CHECKS = [check_valid, check_interference, check_min_wall, check_clearances, check_bed, check_fov, check_battery,
+          check_vents, check_mass, check_estimates]
+
+
+def run_checks(asm: Assembly) -> list[CheckResult]:
+    return [fn(asm) for fn in progress(CHECKS, desc="checks")]
+
+
+def report(results: list[CheckResult], verbose: bool = False) -> str:
+    lines = []
+    for r in results:
+        lines.append(f"[{'ok' if r.ok else 'FAIL'}] {r.name}: {r.summary}")
+        shown = r.details if (verbose or not r.ok or r.name.startswith(("mass", "estimates", "minimum"))) else []
+        if not r.ok and not verbose:
+            shown = [d for d in r.details if d != "intended:"][:40]
+        lines += [f"    {d}" for d in shown]
+    failed = [r.name for r in results if not r.ok]
+    lines.append(f"{len(results) - len(failed)}/{len(results)} checks passed" + (f"; failed: {', '.join(failed)}" if failed else ""))
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,69 @@
+"""Panel-mounted parts: the power switch, the record button and the Wi-Fi antenna bulkheads.
+
+Frame of each: origin at the centre of the panel's outer face, x pointing *out* of the case; the
+bezel (or the antenna) is in front (x > 0), the body behind the panel (x < -panel thickness), the
+neck through the cut-out in between. ``panel_mm`` is the wall it is mounted in (a design value).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cadquery as cq
+
+from platform_tools.rig import Rig
+
+from ..geom import Bounds, cylinder
+from .base import VendorPart, envelope, part_colour
+
+BEZEL_MM = 2.0   # bezel thickness in front of the panel (drawn only; its outline is the envelope's)
+
+
+@dataclass(frozen=True)
+class PanelPart(VendorPart):
+    panel_mm: float = 2.0
+    round_cutout: bool = True
+    cutout_mm: tuple[float, float] = (0.0, 0.0)      # (width along y, height along z) or (d, d)
+    stick_out_mm: float = BEZEL_MM                   # what is in front of the panel
+    stick_out_d_mm: float = 0.0
+
+    @classmethod
+    def switch(cls, rig: Rig, part_id: str, panel_mm: float) -> "PanelPart":
+        return cls(part_id, envelope(rig, part_id), part_colour("panel"), panel_mm, False,
+                   (rig.dim(part_id, "cutout_width_mm"), rig.dim(part_id, "cutout_height_mm")))
+
+    @classmethod
+    def button(cls, rig: Rig, part_id: str, panel_mm: float) -> "PanelPart":
+        d = rig.dim(part_id, "cutout_diameter_mm")
+        return cls(part_id, envelope(rig, part_id), part_colour("panel"), panel_mm, True, (d, d))
+
+    @classmethod
+    def antenna(cls, rig: Rig, part_id: str, panel_mm: float) -> "PanelPart":
+        d = rig.dim(part_id, "bulkhead_hole_diameter_mm")
+        return cls(part_id, envelope(rig, part_id), part_colour("electronics"), panel_mm, True, (d, d),
+                   stick_out_mm=rig.dim(part_id, "antenna_length_mm"), stick_out_d_mm=10.0)
+
+    def cutout(self, margin: float = 0.0, depth: float | None = None) -> cq.Shape:
+        """The hole in the panel (grown by ``margin`` per side), through the panel thickness."""
+        depth = self.panel_mm if depth is None else depth
+        w, h = self.cutout_mm
+        if self.round_cutout:
+            return cylinder(w + 2 * margin, depth + 0.2, (-depth - 0.1, 0, 0), (1, 0, 0))
+        return Bounds((-depth - 0.1, -w / 2 - margin, -h / 2 - margin), (0.1, w / 2 + margin, h / 2 + margin)).solid()
+
+    def bounds(self) -> Bounds:
+        x, y, z = self.size
+        return Bounds((-self.panel_mm - x, -y / 2, -z / 2), (self.stick_out_mm, y / 2, z / 2))
+
+    def build(self) -> cq.Shape:
+        x, y, z = self.size
+        w, h = self.cutout_mm
+        if self.round_cutout:
+            body = cylinder(min(y, z), x, (-self.panel_mm - x, 0, 0), (1, 0, 0))
+            neck = cylinder(w, self.panel_mm, (-self.panel_mm, 0, 0), (1, 0, 0))
+            front_d = self.stick_out_d_mm or min(y, z)
+            front = cylinder(front_d, self.stick_out_mm, (0, 0, 0), (1, 0, 0))
+        else:
+            body = Bounds((-self.panel_mm - x, -y / 2, -z / 2), (-self.panel_mm, y / 2, z / 2)).solid()
+            neck = Bounds((-self.panel_mm, -w / 2, -h / 2), (0.0, w / 2, h / 2)).solid()
+            front = Bounds((0.0, -y / 2, -z / 2), (self.stick_out_mm, y / 2, z / 2)).solid()
+        return body.fuse(neck, front).clean()

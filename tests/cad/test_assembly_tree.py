@@ -1,0 +1,25 @@
+"""What the BOM reads: part ids, quantities, placements, fasteners from the geometry."""
+from cad.assembly import assembly_tree
+from cad.vendor.fasteners import STOCK_LENGTHS_MM
+
+
+def test_every_joint_places_its_fasteners(asm):
+    joints = asm.layout.joints
+    screws = [n for n in asm.nodes if n.category == "fastener" and n.part_id != "m3_insert"]
+    inserts = asm.by_part("m3_insert")
+    assert len(screws) == len(joints)
+    assert len(inserts) == sum(j.kind == "insert" for j in joints)
+    assert all(n.props["length_mm"] in STOCK_LENGTHS_MM for n in screws)
+
+
+def test_tree_counts_and_placements(asm):
+    tree = assembly_tree(asm)
+    leaves = [leaf for g in tree["children"] for leaf in g["children"]]
+    assert len(leaves) == len(asm.nodes)
+    assert sum(tree["counts"].values()) == len(asm.nodes)
+    assert tree["counts"]["handle"] == 3 and tree["counts"]["orin_standoff"] == 4
+    assert tree["counts"]["boson_640"] == 2 and tree["counts"]["fan_3010_5v"] == 2
+    assert all(len(leaf["placement"]) == 4 for leaf in leaves)
+    made = tree["made_parts"]
+    assert made["case_lower"]["volume_mm3"] > 0 and "print_orientation_rpy_deg" in made["case_lid"]
+    assert made["heat_sink"]["category"] == "machined" and made["heat_sink"]["quantity"] == 2
