@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Sequence
 
-from platform_tools.cli.common import dispatch
+from platform_tools.cli.common import dispatch, tool_parser
 
 from . import detect_cmd, nominal_cmd, synth_cmd, thermal_cmd, validate_cmd
 
@@ -13,15 +13,8 @@ COMMANDS = [nominal_cmd, synth_cmd, detect_cmd, thermal_cmd, validate_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="calibrate",
-        description="Calibrate the rig's cameras: nominal models from the rig description, thermal "
-                    "intrinsics from heated-checkerboard images, extrinsics.",
-        epilog="Exit codes: 0 ok, 1 a check failed, 2 bad input or usage.")
-    sub = parser.add_subparsers(title="commands", metavar="COMMAND")
-    for module in COMMANDS:
-        module.register(sub)
-    return parser
+    return tool_parser("calibrate", "Calibrate the rig's cameras: nominal models from the rig description, "
+                       "thermal intrinsics from heated-checkerboard images, extrinsics.", COMMANDS)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

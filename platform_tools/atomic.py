@@ -1,15 +1,18 @@
 """Write outputs atomically: a reader (or a crash) never sees a half-written file or folder.
 
-- :func:`write_text` / :func:`write_bytes`: a temporary file beside the target, fsync, ``os.replace``.
+- :func:`write_text` / :func:`write_bytes` / :func:`open_atomic`: a temporary file beside the target, fsync,
+  ``os.replace``.
 - :class:`OutputDir`: build a whole output folder in a staging folder beside it, then swap it in;
   on any error the staging folder is removed and the previous output is left as it was.
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import tempfile
 from pathlib import Path
+from typing import BinaryIO, Iterator
 
 
 class OutputError(Exception):
@@ -26,7 +29,9 @@ def _check_parent(path: Path) -> None:
         raise OutputError(f"{parent}: permission denied; cannot write outputs there")
 
 
-def write_bytes(path: Path | str, data: bytes) -> Path:
+@contextlib.contextmanager
+def open_atomic(path: Path | str) -> Iterator[BinaryIO]:
+    """A binary file to stream into; it appears at ``path`` whole when the block ends, never otherwise."""
     path = Path(path)
     _check_parent(path)
     try:
@@ -35,7 +40,7 @@ def write_bytes(path: Path | str, data: bytes) -> Path:
         raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
     try:
         with os.fdopen(fd, "wb") as f:
-            f.write(data)
+            yield f
             f.flush()
             os.fsync(f.fileno())
         os.chmod(tmp, 0o644)
@@ -43,7 +48,12 @@ def write_bytes(path: Path | str, data: bytes) -> Path:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-    return path
+
+
+def write_bytes(path: Path | str, data: bytes) -> Path:
+    with open_atomic(path) as f:
+        f.write(data)
+    return Path(path)
 
 
 def write_text(path: Path | str, text: str) -> Path:

@@ -54,3 +54,13 @@ def test_write_text_replaces_atomically(tmp_path: Path):
     write_text(p, "two")
     assert p.read_text() == "two"
     assert [x.name for x in p.parent.iterdir()] == ["b.txt"]
+
+
+def test_open_atomic_failure_mid_stream_leaves_nothing(tmp_path: Path):
+    from platform_tools.atomic import open_atomic
+    target = tmp_path / "stream.bin"
+    with pytest.raises(RuntimeError):
+        with open_atomic(target) as f:
+            f.write(b"partial")
+            raise RuntimeError("died mid-write")
+    assert list(tmp_path.iterdir()) == []

@@ -99,6 +99,16 @@ def run(handler: Callable[[argparse.Namespace], int | None], args: argparse.Name
         return EXIT_OK
 
 
+def tool_parser(prog: str, description: str, modules) -> argparse.ArgumentParser:
+    """The parser of a console script whose subcommands are ``modules`` (each has ``register(sub)``)."""
+    parser = argparse.ArgumentParser(prog=prog, description=description,
+                                     epilog="Exit codes: 0 ok, 1 a check failed, 2 bad input or usage.")
+    sub = parser.add_subparsers(title="commands", metavar="COMMAND")
+    for module in modules:
+        module.register(sub)
+    return parser
+
+
 def dispatch(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> int:
     global _prog
     _prog = parser.prog

@@ -5,7 +5,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..firmware.checks import FAILED, SKIPPED, CheckResult, run_checks
+from ..firmware.checks import FAILED, SKIPPED, Check, run_checks
 from ..firmware.render import write
 from .common import CheckFailed, UserError, add_output_options, add_rig_options, print_json, rig_from_args
 
@@ -33,18 +33,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=cmd_check)
 
 
-def _print_results(results: list[CheckResult]) -> None:
+def _print_results(results: list[Check]) -> None:
     for r in results:
         print(f"  {r.status:7s} {r.name:22s} {r.detail}")
 
 
-def _failed(results: list[CheckResult]) -> list[CheckResult]:
+def _failed(results: list[Check]) -> list[Check]:
     return [r for r in results if r.status == FAILED]
 
 
 def cmd_render(args: argparse.Namespace) -> int:
     rig = rig_from_args(args)
-    results: list[CheckResult] = []
+    results: list[Check] = []
 
     def check(stage: Path) -> None:
         results.extend(run_checks(stage, rig))

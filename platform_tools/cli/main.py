@@ -5,26 +5,19 @@ from __future__ import annotations
 import argparse
 from typing import Sequence
 
-from . import boson_cmd, doctor_cmd, firmware_cmd, record_cmd, rig_cmd, simulate_cmd
+from .common import dispatch, tool_parser
+from . import boson_cmd, doctor_cmd, export_cmd, firmware_cmd, record_cmd, rig_cmd, simulate_cmd, synccheck_cmd
 
 #: subcommand modules, in the order --help lists them
-COMMANDS = [rig_cmd, boson_cmd, firmware_cmd, doctor_cmd, record_cmd, simulate_cmd]
+COMMANDS = [rig_cmd, boson_cmd, firmware_cmd, doctor_cmd, record_cmd, simulate_cmd, synccheck_cmd, export_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="platform_tools",
-        description="Tools of the handheld RGB-thermal rig: the rig description, the Boson cameras, "
-                    "the on-device stack and its recordings.",
-        epilog="Exit codes: 0 ok, 1 a check failed, 2 bad input or usage.")
-    sub = parser.add_subparsers(title="commands", metavar="COMMAND")
-    for module in COMMANDS:
-        module.register(sub)
-    return parser
+    return tool_parser("platform_tools", "Tools of the handheld RGB-thermal rig: the rig description, the Boson "
+                       "cameras, the on-device stack and its recordings.", COMMANDS)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from .common import dispatch
     return dispatch(build_parser(), argv)
 
 

@@ -7,9 +7,7 @@ writes them to ``<name>.recovered.mcap`` next to the original, which is never mo
 """
 from __future__ import annotations
 
-import os
 import struct
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,6 +16,8 @@ from mcap.reader import make_reader
 from mcap.records import Channel, Chunk, Message, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
+
+from ..atomic import open_atomic
 
 RECOVERED_SUFFIX = ".recovered.mcap"
 
@@ -86,38 +86,27 @@ def recover(path: Path) -> Recovered:
     path = Path(path)
     target = path.with_name(path.name[:-len(".mcap")] + RECOVERED_SUFFIX if path.name.endswith(".mcap")
                             else path.name + RECOVERED_SUFFIX)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=path.parent)
     schema_ids: dict[int, int] = {}
     channel_ids: dict[int, int] = {}
-    pending_channels: dict[int, Channel] = {}
     n, stopped = 0, None
-    try:
-        with os.fdopen(fd, "wb") as out:
-            writer = Writer(out, compression=CompressionType.ZSTD)
-            writer.start(profile="ros2", library="rgbt-rig mcap recover")
-            for rec in _salvage(path):
-                if isinstance(rec, Exception):
-                    stopped = f"{type(rec).__name__}: {rec}"
-                    break
-                if isinstance(rec, Schema) and rec.id not in schema_ids:
-                    schema_ids[rec.id] = writer.register_schema(rec.name, rec.encoding, rec.data)
-                elif isinstance(rec, Channel) and rec.id not in channel_ids:
-                    pending_channels[rec.id] = rec
-                    if rec.schema_id == 0 or rec.schema_id in schema_ids:
-                        channel_ids[rec.id] = writer.register_channel(
-                            rec.topic, rec.message_encoding, schema_ids.get(rec.schema_id, 0), dict(rec.metadata))
-                elif isinstance(rec, Message) and rec.channel_id in channel_ids:
-                    writer.add_message(channel_ids[rec.channel_id], rec.log_time, rec.data, rec.publish_time,
-                                       rec.sequence)
-                    n += 1
-            writer.finish()
-            out.flush()
-            os.fsync(out.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with open_atomic(target) as out:
+        writer = Writer(out, compression=CompressionType.ZSTD)
+        writer.start(profile="ros2", library="rgbt-rig mcap recover")
+        for rec in _salvage(path):
+            if isinstance(rec, Exception):
+                stopped = f"{type(rec).__name__}: {rec}"
+                break
+            if isinstance(rec, Schema) and rec.id not in schema_ids:
+                schema_ids[rec.id] = writer.register_schema(rec.name, rec.encoding, rec.data)
+            elif isinstance(rec, Channel) and rec.id not in channel_ids:
+                if rec.schema_id == 0 or rec.schema_id in schema_ids:
+                    channel_ids[rec.id] = writer.register_channel(
+                        rec.topic, rec.message_encoding, schema_ids.get(rec.schema_id, 0), dict(rec.metadata))
+            elif isinstance(rec, Message) and rec.channel_id in channel_ids:
+                writer.add_message(channel_ids[rec.channel_id], rec.log_time, rec.data, rec.publish_time,
+                                   rec.sequence)
+                n += 1
+        writer.finish()
     return Recovered(str(path), str(target), n, stopped)
 
 

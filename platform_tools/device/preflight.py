@@ -17,22 +17,12 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..checks import FAILED, OK, SKIPPED, Check
 from ..rig import Rig
 from .storage import GB, free_bytes, mount_point
 
-OK, FAILED, SKIPPED = "ok", "failed", "skipped"
 SYNC_NAMES = {"slave": "SLAVE", "master": "MASTER", "disabled": "DISABLE"}
 TRIGGER_TOLERANCE = 0.2
-
-
-@dataclass(frozen=True)
-class Check:
-    name: str
-    status: str
-    detail: str
-
-    def to_dict(self) -> dict:
-        return {"name": self.name, "status": self.status, "detail": self.detail}
 
 
 @dataclass

@@ -7,26 +7,15 @@ import configparser
 import re
 import shutil
 import subprocess
-from dataclasses import dataclass
 from pathlib import Path
 
 import yaml
 
+from ..checks import FAILED, OK, SKIPPED, Check
 from ..rig import Rig
 from .context import build_context
 from .launch_stub import Node, load_launch_file
 
-OK, FAILED, SKIPPED = "ok", "failed", "skipped"
-
-
-@dataclass(frozen=True)
-class CheckResult:
-    name: str
-    status: str
-    detail: str
-
-    def to_dict(self) -> dict:
-        return {"name": self.name, "status": self.status, "detail": self.detail}
 
 
 def _run(argv: list[str], cwd: Path) -> subprocess.CompletedProcess:
@@ -48,14 +37,14 @@ def compose_validator() -> list[str] | None:
     return None
 
 
-def check_compose_valid(folder: Path) -> CheckResult:
+def check_compose_valid(folder: Path) -> Check:
     tool = compose_validator()
     if tool is None:
-        return CheckResult("compose valid", SKIPPED, "neither `docker compose` nor `docker-compose` is installed")
+        return Check("compose valid", SKIPPED, "neither `docker compose` nor `docker-compose` is installed")
     r = _run(tool + ["-f", "compose.yaml", "config", "-q"], folder)
     if r.returncode != 0:
-        return CheckResult("compose valid", FAILED, f"{' '.join(tool)} config: {_first_lines(r.stderr + r.stdout)}")
-    return CheckResult("compose valid", OK, f"{' '.join(tool)} config accepts compose.yaml")
+        return Check("compose valid", FAILED, f"{' '.join(tool)} config: {_first_lines(r.stderr + r.stdout)}")
+    return Check("compose valid", OK, f"{' '.join(tool)} config accepts compose.yaml")
 
 
 def _seconds(value) -> float:
@@ -65,7 +54,7 @@ def _seconds(value) -> float:
     return float(m.group(1)) * {"ms": 1e-3, "s": 1, None: 1, "m": 60, "h": 3600}[m.group(2)]
 
 
-def check_compose_matches_rig(folder: Path, rig: Rig) -> CheckResult:
+def check_compose_matches_rig(folder: Path, rig: Rig) -> Check:
     """What the compose file must say for this rig: the stop grace, devices, the data drive."""
     doc = yaml.safe_load((folder / "compose.yaml").read_text())
     ctx = build_context(rig)
@@ -91,20 +80,20 @@ def check_compose_matches_rig(folder: Path, rig: Rig) -> CheckResult:
         if svc.get("restart") not in ("always", "unless-stopped", "on-failure"):
             problems.append(f"service {name} has no restart policy")
     if problems:
-        return CheckResult("compose matches rig", FAILED, "; ".join(problems))
-    return CheckResult("compose matches rig", OK,
+        return Check("compose matches rig", FAILED, "; ".join(problems))
+    return Check("compose matches rig", OK,
                        f"{len(services)} services; recorder stop grace {grace:g} s; devices and data drive mapped")
 
 
 # ----------------------------------------------------------------------------- shell
-def check_shellcheck(folder: Path) -> CheckResult:
+def check_shellcheck(folder: Path) -> Check:
     scripts = sorted((folder / "bin").glob("*.sh"))
     if not shutil.which("shellcheck"):
-        return CheckResult("shellcheck", SKIPPED, "shellcheck is not installed")
+        return Check("shellcheck", SKIPPED, "shellcheck is not installed")
     r = _run(["shellcheck", "--format=gcc", *map(str, scripts)], folder)
     if r.returncode != 0:
-        return CheckResult("shellcheck", FAILED, _first_lines(r.stdout + r.stderr))
-    return CheckResult("shellcheck", OK, f"{len(scripts)} scripts clean")
+        return Check("shellcheck", FAILED, _first_lines(r.stdout + r.stderr))
+    return Check("shellcheck", OK, f"{len(scripts)} scripts clean")
 
 
 # ----------------------------------------------------------------------------- launch and parameters
@@ -112,7 +101,7 @@ def _params_file(folder: Path, path: str) -> Path:
     return folder / "config" / Path(path).name
 
 
-def check_params(folder: Path) -> CheckResult:
+def check_params(folder: Path) -> Check:
     bad = []
     files = sorted((folder / "config").glob("*.yaml"))
     for f in files:
@@ -125,8 +114,8 @@ def check_params(folder: Path) -> CheckResult:
         except (yaml.YAMLError, AttributeError) as exc:
             bad.append(f"{f.name}: {exc}")
     if bad:
-        return CheckResult("parameter files", FAILED, "; ".join(bad))
-    return CheckResult("parameter files", OK, f"{len(files) - 1} ROS 2 parameter files parse")
+        return Check("parameter files", FAILED, "; ".join(bad))
+    return Check("parameter files", OK, f"{len(files) - 1} ROS 2 parameter files parse")
 
 
 def _launched_nodes(folder: Path) -> list[Node]:
@@ -141,11 +130,11 @@ def _launched_nodes(folder: Path) -> list[Node]:
     return nodes
 
 
-def check_launch(folder: Path, rig: Rig) -> CheckResult:
+def check_launch(folder: Path, rig: Rig) -> Check:
     try:
         nodes = _launched_nodes(folder)
     except Exception as exc:  # a generated launch file that does not import is the failure reported
-        return CheckResult("launch files", FAILED, f"{type(exc).__name__}: {exc}")
+        return Check("launch files", FAILED, f"{type(exc).__name__}: {exc}")
     problems = []
     ctx = build_context(rig)
     for t in ctx["thermal"]:
@@ -163,12 +152,12 @@ def check_launch(folder: Path, rig: Rig) -> CheckResult:
     if len(tfs) != len(ctx["static_tfs"]):
         problems.append(f"{len(tfs)} static transforms, expected {len(ctx['static_tfs'])}")
     if problems:
-        return CheckResult("launch files", FAILED, "; ".join(problems))
-    return CheckResult("launch files", OK, f"import and build {len(nodes)} nodes ({len(tfs)} static transforms)")
+        return Check("launch files", FAILED, "; ".join(problems))
+    return Check("launch files", OK, f"import and build {len(nodes)} nodes ({len(tfs)} static transforms)")
 
 
 # ----------------------------------------------------------------------------- systemd, udev
-def check_unit(folder: Path, rig: Rig) -> CheckResult:
+def check_unit(folder: Path, rig: Rig) -> Check:
     path = folder / "systemd" / "rgbt-rig.service"
     parser = configparser.ConfigParser(strict=True, interpolation=None)
     parser.optionxform = str
@@ -176,7 +165,7 @@ def check_unit(folder: Path, rig: Rig) -> CheckResult:
     try:
         parser.read_string(path.read_text())
     except configparser.Error as exc:
-        return CheckResult("systemd unit", FAILED, f"{path.name}: {exc}")
+        return Check("systemd unit", FAILED, f"{path.name}: {exc}")
     unit, service = parser["Unit"], parser["Service"]
     if unit.get("RequiresMountsFor") != rig.desc.recording.data_mount:
         problems.append(f"RequiresMountsFor is not the data mount {rig.desc.recording.data_mount}")
@@ -190,9 +179,9 @@ def check_unit(folder: Path, rig: Rig) -> CheckResult:
         syntax = [ln for ln in (r.stderr + r.stdout).splitlines() if re.match(rf"{re.escape(str(path))}:\d+:", ln)]
         problems += syntax
     if problems:
-        return CheckResult("systemd unit", FAILED, "; ".join(problems))
+        return Check("systemd unit", FAILED, "; ".join(problems))
     tool = " (and systemd-analyze verify)" if shutil.which("systemd-analyze") else ""
-    return CheckResult("systemd unit", OK, f"starts after the data drive and the ZED X daemon{tool}")
+    return Check("systemd unit", OK, f"starts after the data drive and the ZED X daemon{tool}")
 
 
 _UDEV_PAIR = re.compile(r'\s*([A-Za-z_]+(?:\{[^}]+\})?)\s*(==|!=|\+=|-=|:=|=)\s*"([^"]*)"\s*(?:,|$)')
@@ -210,7 +199,7 @@ def parse_udev_line(line: str) -> list[tuple[str, str, str]]:
     return pairs
 
 
-def check_udev(folder: Path, rig: Rig) -> CheckResult:
+def check_udev(folder: Path, rig: Rig) -> Check:
     path = folder / "udev" / "99-rgbt-boson.rules"
     names, problems = [], []
     for n, line in enumerate(path.read_text().splitlines(), 1):
@@ -227,12 +216,12 @@ def check_udev(folder: Path, rig: Rig) -> CheckResult:
     if sorted(names) != sorted(expected):
         problems.append(f"symlinks {sorted(names)}, expected {sorted(expected)}")
     if problems:
-        return CheckResult("udev rules", FAILED, "; ".join(problems))
-    return CheckResult("udev rules", OK, f"{len(names)} stable names" +
+        return Check("udev rules", FAILED, "; ".join(problems))
+    return Check("udev rules", OK, f"{len(names)} stable names" +
                        ("" if len(expected) == 4 else " (serial numbers not set yet)"))
 
 
-def run_checks(folder: Path, rig: Rig) -> list[CheckResult]:
+def run_checks(folder: Path, rig: Rig) -> list[Check]:
     folder = Path(folder).resolve()   # validators run inside the folder: no relative path may leak in
     return [check_compose_valid(folder), check_compose_matches_rig(folder, rig), check_shellcheck(folder),
             check_params(folder), check_launch(folder, rig), check_unit(folder, rig), check_udev(folder, rig)]
