@@ -3,6 +3,8 @@
     python cad/build.py export STEP|STL|GLB|SVG|PNG|all [--out DIR] [--set key=value ...]
     python cad/build.py check [--report FILE] [--json]
     python cad/build.py params [--json]
+    python cad/build.py bom [--out DIR]     (bill of materials, bom/cli.py)
+    python cad/build.py docs [--out DIR]    (assembly guide, BOM, wiring, printing pages)
 
 Exit codes: 0 ok, 1 a check failed, 2 bad input (a bad --set, an impossible design, an unwritable
 output folder, an unknown format).
@@ -138,6 +140,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_rig_options(r)
     add_output_options(r)
     r.set_defaults(handler=cmd_params)
+
+    from bom.cli import register as register_bom   # `bom` and `docs` (bom/cli.py)
+    register_bom(sub)
     return p
 
 

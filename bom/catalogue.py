@@ -1,0 +1,143 @@
+"""Load and check bom/parts.yaml against the rig description.
+
+Every problem is one line naming the file, the line and the entry, as the rig loader does:
+``bom/parts.yaml:42: parts.zed_x.price.currency: got 'US$' ...``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator
+
+from platform_tools.rig import Rig
+from platform_tools.rig.typed import Problem, closest, convert
+from platform_tools.rig.yamlsource import YamlSource, YamlSourceError, load_yaml_file
+
+from .catalogue_schema import Catalogue, CatalogueEntry
+
+DEFAULT_CATALOGUE = Path(__file__).resolve().parent / "parts.yaml"
+
+
+class CatalogueError(Exception):
+    def __init__(self, lines: list[str]):
+        self.lines = lines
+        super().__init__("\n".join(lines))
+
+
+@dataclass(frozen=True)
+class LoadedCatalogue:
+    catalogue: Catalogue
+    source: YamlSource
+
+    @property
+    def path(self) -> Path:
+        return self.source.path
+
+    @property
+    def entries(self):
+        return self.catalogue.parts
+
+    def where(self, part_id: str) -> str:
+        return self.source.where(("parts", part_id))
+
+    def unit_price(self, entry: CatalogueEntry) -> float:
+        """Price of one unit in the base currency."""
+        rate = 1.0 if entry.price.currency == self.catalogue.base_currency else \
+            self.catalogue.exchange_rates[entry.price.currency]
+        return entry.price.amount * rate / entry.pack_size
+
+
+def load_catalogue(rig: Rig, path: Path | str | None = None) -> LoadedCatalogue:
+    path = Path(path) if path is not None else DEFAULT_CATALOGUE
+    try:
+        source = load_yaml_file(path)
+    except YamlSourceError as exc:
+        raise CatalogueError([str(exc)]) from None
+    if not isinstance(source.data, dict):
+        raise CatalogueError([f"{path}: expected a YAML mapping at the top level"])
+    cat, problems = convert(Catalogue, source.data)
+    if not problems:
+        problems = list(_rules(cat, rig))
+    if problems:
+        raise CatalogueError([f"{source.where(p.path)}: {p}" for p in problems])
+    return LoadedCatalogue(cat, source)
+
+
+def _rules(cat: Catalogue, rig: Rig) -> Iterator[Problem]:
+    rig_parts = rig.desc.parts
+    for cur in cat.exchange_rates:
+        if cur == cat.base_currency:
+            yield Problem(("exchange_rates", cur), f"is the base currency; it needs no rate")
+    seen_numbers: dict[str, str] = {}
+    for pid, e in cat.parts.items():
+        path = ("parts", pid)
+        if e.price.currency != cat.base_currency and e.price.currency not in cat.exchange_rates:
+            yield Problem(path + ("price", "currency"),
+                          f"is {e.price.currency}, which has no rate in exchange_rates (base {cat.base_currency})")
+        if not e.link.startswith(("https://", "http://")):
+            yield Problem(path + ("link",), f"is {e.link!r}; expected a web address starting with https://")
+        fields = _link_fields(e.link)
+        if fields - {"thread", "length_mm"}:
+            yield Problem(path + ("link",), f"uses {{{sorted(fields - {'thread', 'length_mm'})[0]}}}; a link may only "
+                                            "use {thread} and {length_mm} (one link per fastener length)")
+        if e.made is not None:
+            if pid in rig_parts:
+                yield Problem(path + ("made",), f"{pid} is a bought part of the rig description; remove made")
+            if e.supply is not None or not e.in_cad:
+                yield Problem(path, "is made from the CAD model (made: machined); remove supply and in_cad: false")
+            continue
+        if pid in rig_parts:
+            if e.supply is not None:
+                yield Problem(path + ("supply",), f"{pid} is a part of the rig description, which already says "
+                                                  f"what it is; remove supply (and keep in_cad: true)")
+            if not e.in_cad:
+                yield Problem(path + ("in_cad",), f"{pid} is placed by the CAD model; expected in_cad: true")
+            number = rig_parts[pid].part_number
+        else:
+            if e.in_cad:
+                hint = closest(pid, rig_parts)
+                yield Problem(path, f"is not a part of the rig description"
+                                    + (f" (did you mean {hint!r}?)" if hint else "")
+                                    + "; a part the CAD model does not place needs in_cad: false and supply")
+                continue
+            if e.supply is None:
+                yield Problem(path + ("supply",), "is missing; a part not in the CAD model must declare vendor, "
+                                                  "part number, mass, quantity and why it is needed")
+                continue
+            number = e.supply.part_number
+            yield from _supply_rules(e, path, rig)
+        if number in seen_numbers:
+            yield Problem(path, f"has part number {number!r}, already used by parts.{seen_numbers[number]}")
+        seen_numbers[number] = pid
+
+
+def _link_fields(link: str) -> set[str]:
+    import string
+    try:
+        return {f for _, f, _, _ in string.Formatter().parse(link) if f is not None}
+    except ValueError:
+        return {"(unbalanced brace)"}
+
+
+def _supply_rules(e: CatalogueEntry, path: tuple, rig: Rig) -> Iterator[Problem]:
+    s = e.supply
+    sp = path + ("supply",)
+    if s.quantity_from is None:
+        if s.quantity is None:
+            yield Problem(sp + ("quantity",), "is missing; give a quantity per rig (or quantity_from: printed_parts)")
+        if s.mass_g is None:
+            yield Problem(sp + ("mass_g",), "is missing; give the mass of one unit (0 if it stays out of the rig)")
+        if s.waste_percent:
+            yield Problem(sp + ("waste_percent",), "only applies to a computed quantity (quantity_from)")
+        return
+    if s.quantity is not None:
+        yield Problem(sp + ("quantity",), f"is {s.quantity:g}, but quantity_from: {s.quantity_from} computes it; "
+                                          "remove one of them")
+    if s.mass_g is not None:
+        yield Problem(sp + ("mass_g",), "is counted on the printed parts' lines (CAD volume x density); remove it")
+    if s.unit not in ("g", "kg"):
+        yield Problem(sp + ("unit",), f"is {s.unit}; filament computed from printed_parts is bought by g or kg")
+    material = rig.desc.printing.printer.material
+    if material.lower() not in (s.part_number + " " + s.description).lower():
+        yield Problem(sp + ("part_number",), f"is {s.part_number!r}, but the rig prints in {material} "
+                                             "(printing.printer.material)")

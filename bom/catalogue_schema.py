@@ -1,0 +1,108 @@
+"""The catalogue of bought parts (bom/parts.yaml): what to buy, where, and for how much.
+
+The catalogue holds only purchasing facts. What a part *is* (vendor, part number, mass, size) lives in
+the rig description for every part the CAD model places; the catalogue names those parts by their
+rig id and adds the link and the price. Parts the CAD model does not place (cables, the data drive,
+filament, thermal paste) are declared here in full, with `in_cad: false` and a quantity per rig.
+
+Three kinds of entry:
+
+- a rig part (its id is a key of ``parts:`` in config/rig.yaml): link and price only; the quantity is
+  counted from the CAD assembly, the mass comes from the rig;
+- a made part the CAD model places but no shop sells off the shelf (``made: machined``, the copper
+  heat sink): the price is a job shop's per-piece price for machining it from the CAD model (material
+  included); the quantity is counted from the assembly, the material from the rig, the mass from the CAD
+  volume x the rig's density;
+- a supply (``in_cad: false``): declared in full under ``supply``, with a quantity per rig, or
+  ``quantity_from: printed_parts`` for the filament, whose quantity the BOM computes from the printed
+  volumes (plus ``waste_percent`` for purge, brims and failed prints).
+
+``price.amount`` is the price of one pack of ``pack_size`` units; the BOM buys whole packs.
+"""
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from typing import Annotated, Literal, Mapping, Optional
+
+from platform_tools.rig.typed import Ge, Gt
+
+#: ISO 4217 codes the catalogue accepts; a price in another currency is refused by name
+Currency = Literal["USD", "EUR", "GBP", "CHF", "CAD", "AUD", "JPY", "CNY"]
+IsoDate = Annotated[str, "YYYY-MM-DD"]
+
+
+class Category(enum.Enum):
+    SENSORS = "sensors"
+    COMPUTE = "compute"
+    POWER = "power"
+    THERMAL = "thermal"
+    FASTENERS = "fasteners"
+    CABLES = "cables"
+    ELECTRONICS = "electronics"
+    PRINTED = "printed"
+    CONSUMABLES = "consumables"
+
+
+class PriceConfidence(enum.Enum):
+    QUOTED = "quoted"        # read from the supplier's page on price_checked
+    ESTIMATE = "estimate"    # a typical price; check before ordering
+
+
+@dataclass(frozen=True)
+class Price:
+    amount: Annotated[float, Gt(0)]
+    currency: Currency
+    checked: IsoDate
+    confidence: PriceConfidence
+
+    def __post_init__(self) -> None:
+        import datetime
+        try:
+            datetime.date.fromisoformat(self.checked)
+        except ValueError:
+            raise ValueError(f"checked: {self.checked!r} is not a date; expected YYYY-MM-DD") from None
+
+
+@dataclass(frozen=True)
+class Supply:
+    """A part not placed by the CAD model: everything about it is declared here."""
+    vendor: str
+    part_number: str
+    description: str
+    unit: Literal["pcs", "m", "g", "kg", "ml"]
+    why: str  # what it is for, since no geometry shows it
+    #: mass of one unit (one piece, one metre ...); omitted for a quantity_from supply (its mass is
+    #: the printed parts' own, counted on their lines)
+    mass_g: Optional[Annotated[float, Ge(0)]] = None
+    #: per rig; omitted when quantity_from says where the BOM computes it from
+    quantity: Optional[Annotated[float, Gt(0)]] = None
+    #: printed_parts: the sum of the printed parts' masses from their CAD volumes (unit g or kg)
+    quantity_from: Optional[Literal["printed_parts"]] = None
+    #: extra on a computed quantity (purge, brims, a failed print)
+    waste_percent: Annotated[float, Ge(0)] = 0.0
+
+
+@dataclass(frozen=True)
+class CatalogueEntry:
+    category: Category
+    supplier: str
+    link: str
+    price: Price
+    #: per-unit price applies to this many units (a bag of 100 screws: pack_size 100)
+    pack_size: Annotated[int, Gt(0)] = 1
+    #: False for parts the CAD model does not place; they must then declare `supply`
+    in_cad: bool = True
+    supply: Optional[Supply] = None
+    #: a part the CAD model places that is made to order from its geometry (the copper heat sink)
+    made: Optional[Literal["machined"]] = None
+
+
+@dataclass(frozen=True)
+class Catalogue:
+    schema_version: Literal[1]
+    base_currency: Currency
+    #: units of base currency per unit of each other currency, and when the rate was read
+    exchange_rates: Mapping[str, Annotated[float, Gt(0)]]
+    rates_checked: IsoDate
+    parts: Mapping[str, CatalogueEntry]

@@ -1,0 +1,122 @@
+"""Pictures of the assembly guide, rendered from the CAD model with VTK (off screen, EGL).
+
+Each step's picture is an exploded view (``cad.export.exploded_poses``) of the nodes added so far:
+what the step adds in the highlight colour, what was already in place faded. The overview pictures of
+the index page are cad.render's own views.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+HIGHLIGHT = (0.12, 0.47, 0.95)   # blue: nothing else in the rig is blue (PETG orange, copper, black parts)
+FADE = 0.6                       # earlier parts: blended this far towards light grey
+
+
+def _vtk():
+    import vtk
+    vtk.vtkObject.GlobalWarningDisplayOff()
+    return vtk
+
+
+def _poly(vtk, shape, tolerance):
+    from vtk.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
+    verts, tris = shape.tessellate(tolerance, 0.3)
+    pts = vtk.vtkPoints()
+    pts.SetData(numpy_to_vtk(np.array([v.toTuple() for v in verts], dtype=float).reshape(-1, 3), deep=True))
+    t = np.asarray(tris, dtype=np.int64).reshape(-1, 3)
+    cells = vtk.vtkCellArray()
+    conn = np.hstack([np.full((len(t), 1), 3, dtype=np.int64), t]).ravel()
+    cells.SetCells(len(t), numpy_to_vtkIdTypeArray(conn, deep=True))
+    poly = vtk.vtkPolyData()
+    poly.SetPoints(pts)
+    poly.SetPolys(cells)
+    normals = vtk.vtkPolyDataNormals()
+    normals.SetInputData(poly)
+    normals.SetFeatureAngle(35)
+    normals.Update()
+    return normals.GetOutput()
+
+
+def _actor(vtk, poly, colour, pose, opacity=1.0):
+    mapper = vtk.vtkPolyDataMapper()
+    mapper.SetInputData(poly)
+    actor = vtk.vtkActor()
+    actor.SetMapper(mapper)
+    prop = actor.GetProperty()
+    prop.SetColor(*colour[:3])
+    prop.SetOpacity(opacity)
+    prop.SetAmbient(0.25)
+    prop.SetDiffuse(0.75)
+    m = vtk.vtkMatrix4x4()
+    M = pose.matrix()
+    for i in range(4):
+        for j in range(4):
+            m.SetElement(i, j, float(M[i, j]))
+    actor.SetUserMatrix(m)
+    return actor
+
+
+def render_steps(asm, steps, folder: Path, *, size=(960, 640), tolerance: float = 0.25) -> list[Path]:
+    """One PNG per step (``step_NN.png``): nodes so far in the exploded view, the new ones highlighted."""
+    from cad.export import exploded_poses
+    vtk = _vtk()
+    folder.mkdir(parents=True, exist_ok=True)
+    exploded = exploded_poses(asm)
+    nodes = {n.name: n for n in asm.nodes}
+    meshes: dict[int, object] = {}
+    done: list[str] = []
+    out = []
+    for st in steps:
+        ren = vtk.vtkRenderer()
+        ren.SetBackground(1, 1, 1)
+        ren.SetBackground2(0.88, 0.91, 0.95)
+        ren.GradientBackgroundOn()
+        new = set(st.nodes)
+        for name in done + st.nodes:
+            n = nodes[name]
+            key = id(n.spec)
+            if key not in meshes:
+                meshes[key] = _poly(vtk, n.local_shape(asm.cache), tolerance)
+            if name in new:
+                colour, opacity = HIGHLIGHT, 1.0
+            else:
+                c = np.asarray(n.colour[:3])
+                colour, opacity = tuple(c * (1 - FADE) + np.array([0.85, 0.86, 0.88]) * FADE), 0.55
+            ren.AddActor(_actor(vtk, meshes[key], colour, exploded[name], opacity))
+        done.extend(st.nodes)
+        win = vtk.vtkRenderWindow()
+        win.SetOffScreenRendering(1)
+        win.SetAlphaBitPlanes(1)
+        win.AddRenderer(ren)
+        win.SetSize(*size)
+        cam = ren.GetActiveCamera()
+        d = np.asarray(st.view, dtype=float)
+        d /= np.linalg.norm(d)
+        cam.SetFocalPoint(0, 0, 0)
+        cam.SetPosition(*(d * 1000))
+        cam.SetViewUp(*((0, 0, 1) if abs(d[2]) < 0.99 else (1, 0, 0)))
+        ren.ResetCamera()
+        cam.Zoom(1.25)
+        win.Render()
+        grab = vtk.vtkWindowToImageFilter()
+        grab.SetInput(win)
+        grab.Update()
+        p = folder / f"step_{st.number:02d}.png"
+        writer = vtk.vtkPNGWriter()
+        writer.SetFileName(str(p))
+        writer.SetInputConnection(grab.GetOutputPort())
+        writer.Write()
+        win.Finalize()
+        st.picture = f"img/{p.name}"
+        out.append(p)
+    return out
+
+
+def render_overview(asm, folder: Path, tolerance: float = 0.25) -> list[Path]:
+    """iso, front, top and exploded views of the whole rig (cad.render's own renderer)."""
+    from cad.export import VIEWS, exploded_poses
+    from cad.render import render_views
+    folder.mkdir(parents=True, exist_ok=True)
+    return render_views(asm, folder, VIEWS, exploded_poses(asm), tolerance, size=(1000, 750))

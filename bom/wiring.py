@@ -1,0 +1,168 @@
+"""The wiring diagram: an SVG drawn from the rig description (parts, voltages, sync pins, GPIO pins).
+
+Blocks stand where their role puts them (power chain on the left, the Orin and capture card in the
+middle, cameras and fans on the right, controls below); every label that is a rig value (voltages,
+connector and pin numbers, the trigger level and edge, GPIO pins) is read from the rig, and the
+electrical checks below are computed from the same values.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from html import escape
+
+#: Boson external-sync input: a 3-12 V pulse (shared/reference/boson-protocol.md: public notes, verify)
+BOSON_SYNC_INPUT_V = (3.0, 12.0)
+#: Jetson 40-pin header (NVIDIA AGX Orin devkit pinout, same layout as a Raspberry Pi header)
+HEADER_5V_PIN, HEADER_GND_PIN = 2, 6
+
+KINDS = {  # colour, label
+    "power": ("#d62728", "power"),
+    "data": ("#1f5fbf", "data"),
+    "sync": ("#2ca02c", "sync trigger"),
+    "gpio": ("#8e44ad", "GPIO"),
+    "ground": ("#333333", "ground"),
+}
+
+
+@dataclass
+class Block:
+    id: str
+    x: float
+    y: float
+    w: float
+    h: float
+    title: str
+    lines: list[str]
+
+
+@dataclass
+class Wire:
+    kind: str
+    a: str
+    b: str
+    label: str
+    path: list[tuple[float, float]]
+    label_at: tuple[float, float] | None = None   # start of the label (left aligned); default: mid first segment
+
+
+@dataclass
+class Check:
+    ok: bool
+    text: str
+
+
+def _v(r) -> str:
+    return f"{r.min:g} V" if r.min == r.max else f"{r.min:g}-{r.max:g} V"
+
+
+def wiring(rig) -> tuple[list[Block], list[Wire], list[Check]]:
+    d = rig.desc
+    P = rig.part
+    s, b = d.sync, d.recording.button
+    bat, conv, orin, fan = P("makita_bl1840b"), P("dc_converter"), P("jetson_agx_orin"), P("fan_3010_5v")
+    src = P(s.source_part)
+    blocks = [
+        Block("battery", 30, 40, 230, 70, bat.vendor + " " + bat.part_number, [f"out {_v(bat.output_v)}"]),
+        Block("fuse", 30, 160, 230, 60, "fuse", [P("blade_fuse").part_number]),
+        Block("switch", 30, 270, 230, 60, "power switch", [P("power_switch").part_number.split(" (")[0]]),
+        Block("converter", 30, 380, 230, 70, "DC-DC converter", [f"in {_v(conv.supply_v)}, out {_v(conv.output_v)}"]),
+        Block("card", 370, 40, 300, 90, f"{src.part_number} (capture card)",
+              ["GMSL2 camera ports", f"{s.connector}: trigger out, pin {s.signal_pin} signal, pin {s.ground_pin} GND"]),
+        Block("orin", 370, 200, 300, 290, "Jetson AGX Orin devkit",
+              [f"DC jack, in {_v(orin.supply_v)}", "USB ports", "M.2: NVMe SSD, Wi-Fi card",
+               f"40-pin header ({b.pin_numbering} numbering):",
+               f"  pin {b.gpio_pin} record button",
+               f"  pin {b.led_pin} button LED",
+               f"  pin {HEADER_5V_PIN} 5 V, pin {HEADER_GND_PIN} GND (fans)"]),
+        Block("zed", 790, 40, 230, 70, "ZED X", ["GMSL2 (Fakra)"]),
+        Block("boson_left", 790, 170, 230, 70, "Boson 640 left", ["USB-C, external sync in"]),
+        Block("boson_right", 790, 290, 230, 70, "Boson 640 right", ["USB-C, external sync in"]),
+        Block("fans", 790, 410, 230, 70, f"2 x {fan.part_number}", [f"{_v(fan.supply_v)}"]),
+        Block("button", 370, 560, 300, 70, "record button with LED", [P("record_button").part_number]),
+        Block("wifi", 30, 540, 230, 60, "2 x Wi-Fi antenna", ["RP-SMA bulkheads, u.fl pigtails"]),
+        Block("ssd", 30, 640, 230, 50, "NVMe SSD", ["recordings (" + d.recording.data_mount + ")"]),
+    ]
+    wires = [
+        Wire("power", "battery", "fuse", f"+ {_v(bat.output_v)}", [(145, 110), (145, 160)]),
+        Wire("power", "fuse", "switch", "fused +", [(145, 220), (145, 270)]),
+        Wire("power", "switch", "converter", "switched +", [(145, 330), (145, 380)]),
+        Wire("power", "converter", "orin", f"{_v(conv.output_v)} to DC jack", [(260, 415), (315, 415), (315, 230), (370, 230)],
+             label_at=(266, 442)),
+        Wire("ground", "battery", "converter", "battery - (common ground)", [(30, 95), (15, 95), (15, 440), (30, 440)],
+             label_at=(20, 468)),
+        Wire("power", "orin", "fans", f"5 V pin {HEADER_5V_PIN} / GND pin {HEADER_GND_PIN}", [(670, 445), (790, 445)]),
+        Wire("data", "zed", "card", "GMSL2", [(790, 75), (670, 75)]),
+        Wire("data", "card", "orin", "camera connector", [(520, 130), (520, 200)]),
+        Wire("data", "boson_left", "orin", "USB", [(790, 215), (730, 215), (730, 260), (670, 260)]),
+        Wire("data", "boson_right", "orin", "USB", [(790, 335), (730, 335), (730, 290), (670, 290)]),
+        Wire("sync", "card", "boson_left", f"{s.connector}.{s.signal_pin}: {s.level_v:g} V, {s.edge} edge, {s.rate_hz:g} Hz",
+             [(670, 115), (760, 115), (760, 195), (790, 195)], label_at=(768, 138)),
+        Wire("sync", "card", "boson_right", "", [(760, 195), (760, 315), (790, 315)]),
+        Wire("ground", "card", "boson_left", f"{s.connector}.{s.ground_pin} GND", [(670, 125), (750, 125), (750, 230), (790, 230)], label_at=(768, 156)),
+        Wire("ground", "card", "boson_right", "", [(750, 230), (750, 350), (790, 350)]),
+        Wire("gpio", "button", "orin", f"pin {b.gpio_pin} (button), pin {b.led_pin} (LED)", [(520, 560), (520, 490)]),
+        Wire("data", "wifi", "orin", "u.fl", [(260, 570), (340, 570), (340, 470), (370, 470)]),
+        Wire("data", "ssd", "orin", "M.2", [(260, 665), (350, 665), (350, 480), (370, 480)]),
+    ]
+    lo, hi = BOSON_SYNC_INPUT_V
+    checks = [
+        Check(lo <= s.level_v <= hi, f"sync level {s.level_v:g} V (sync.level_v) within the Boson's external-sync "
+                                     f"input range {lo:g}-{hi:g} V"),
+        Check(bat.output_v.max <= conv.supply_v.max and bat.output_v.min >= conv.supply_v.min,
+              f"battery {_v(bat.output_v)} within the converter's input {_v(conv.supply_v)}"),
+        Check(orin.supply_v.min <= conv.output_v.min and conv.output_v.max <= orin.supply_v.max,
+              f"converter output {_v(conv.output_v)} within the Orin's input {_v(orin.supply_v)}"),
+        Check(fan.supply_v.min <= 5.0 <= fan.supply_v.max, f"fans ({_v(fan.supply_v)}) on the header's 5 V"),
+        Check(len({b.gpio_pin, b.led_pin, HEADER_5V_PIN, HEADER_GND_PIN}) == 4,
+              f"header pins distinct: button {b.gpio_pin}, LED {b.led_pin}, fan 5 V {HEADER_5V_PIN}, GND {HEADER_GND_PIN}"),
+    ]
+    return blocks, wires, checks
+
+
+def _fit(text: str, width: float, px_per_char: float = 6.3) -> str:
+    n = int(width / px_per_char)
+    return text if len(text) <= n else text[:n - 1].rstrip(" ,") + "…"
+
+
+def svg(rig) -> str:
+    blocks, wires, _ = wiring(rig)
+    W, H = 1050, 760
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" '
+           'font-family="DejaVu Sans, sans-serif" font-size="12">',
+           f'<title>Wiring of {escape(rig.desc.name)}</title>',
+           f'<rect width="{W}" height="{H}" fill="#ffffff"/>']
+    for w in wires:
+        colour = KINDS[w.kind][0]
+        pts = " ".join(f"{x:g},{y:g}" for x, y in w.path)
+        dash = ' stroke-dasharray="6 4"' if w.kind == "ground" else ""
+        out.append(f'<polyline class="wire {w.kind}" data-from="{w.a}" data-to="{w.b}" points="{pts}" fill="none" '
+                   f'stroke="{colour}" stroke-width="2.5"{dash}/>')
+    for bl in blocks:
+        out.append(f'<g class="block" id="blk-{bl.id}"><rect x="{bl.x}" y="{bl.y}" width="{bl.w}" height="{bl.h}" '
+                   'rx="6" fill="#f4f6f8" stroke="#24323f" stroke-width="1.5"/>')
+        out.append(f'<text x="{bl.x + 10}" y="{bl.y + 20}" font-weight="bold">{escape(bl.title)}</text>')
+        for k, line in enumerate(bl.lines):
+            out.append(f'<text x="{bl.x + 10}" y="{bl.y + 38 + 16 * k}" xml:space="preserve">'
+                       f'{escape(_fit(line, bl.w - 16))}</text>')
+        out.append("</g>")
+    for w in wires:  # labels on top of blocks' edges
+        if not w.label:
+            continue
+        (x0, y0), (x1, y1) = w.path[0], w.path[1]
+        x, y = (x0 + x1) / 2, (y0 + y1) / 2
+        vertical = abs(x1 - x0) < 1
+        tx, ty = (x + 6, y + 4) if vertical else (x, y - 6)
+        anchor = "start" if vertical else "middle"
+        if w.label_at is not None:
+            (tx, ty), anchor = w.label_at, "start"
+        out.append(f'<text x="{tx:g}" y="{ty:g}" text-anchor="{anchor}" fill="{KINDS[w.kind][0]}" font-size="11" '
+                   f'paint-order="stroke" stroke="#ffffff" stroke-width="3">{escape(w.label)}</text>')
+    y = H - 20
+    x = 300
+    for kind, (colour, label) in KINDS.items():
+        dash = ' stroke-dasharray="6 4"' if kind == "ground" else ""
+        out.append(f'<line x1="{x}" y1="{y}" x2="{x + 30}" y2="{y}" stroke="{colour}" stroke-width="3"{dash}/>'
+                   f'<text x="{x + 36}" y="{y + 4}">{label}</text>')
+        x += 130
+    out.append("</svg>")
+    return "\n".join(out) + "\n"

@@ -1,0 +1,127 @@
+"""The BOM is the CAD assembly joined with the catalogue: counts, masses, filament, packs, outputs."""
+from __future__ import annotations
+
+import math
+
+import pytest
+import yaml
+
+from cad.build import main as build_main
+from platform_tools.rig import load_rig
+
+from .conftest import REPO, read_bom
+
+CATALOGUE = REPO / "bom" / "parts.yaml"
+
+
+@pytest.fixture(scope="module")
+def tree():
+    from cad.assembly import assembly_tree, build
+    return assembly_tree(build(load_rig()))
+
+
+def test_quantities_come_from_the_assembly(bom_default, tree):
+    rows = read_bom(bom_default)
+    for key, count in tree["counts"].items():
+        if tree["made_parts"].get(key, {}).get("category") == "printed":
+            continue
+        assert float(rows[key]["quantity"]) == count, key
+    # every screw length is its own line, bought in whole packs
+    screws = {k: r for k, r in rows.items() if k.startswith("m3_screw:")}
+    assert set(screws) == {k for k in tree["counts"] if k.startswith("m3_screw:")}
+    for r in screws.values():
+        assert int(r["packs"]) == math.ceil(float(r["quantity"]) / int(r["pack_size"]))
+
+
+def test_masses_and_filament(bom_default, tree):
+    rig = load_rig()
+    rows = read_bom(bom_default)
+    assert float(rows["jetson_agx_orin"]["mass_g"]) == rig.part("jetson_agx_orin").mass_g.value
+    hs = tree["made_parts"]["heat_sink"]
+    assert float(rows["heat_sink"]["mass_g"]) == pytest.approx(hs["mass_g"] * 2, abs=0.2)
+    printed = sum(v["mass_g"] * v["quantity"] for v in tree["made_parts"].values() if v["category"] == "printed")
+    waste = yaml.safe_load(CATALOGUE.read_text())["parts"]["petg_filament"]["supply"]["waste_percent"]
+    assert float(rows["petg_filament"]["quantity"]) == pytest.approx(printed * (1 + waste / 100), abs=2)
+    assert float(rows["petg_filament"]["mass_g"]) == 0          # counted on the printed parts' lines
+    total = rows["total"]
+    assert float(total["cost"]) == pytest.approx(sum(float(r["cost"]) for k, r in rows.items() if k != "total"), abs=0.05)
+    assert float(total["mass_g"]) == pytest.approx(sum(float(r["mass_g"]) for k, r in rows.items() if k != "total"), abs=0.5)
+
+
+def test_md_and_html_group_by_category(bom_default):
+    md = (bom_default / "bom.md").read_text()
+    html = (bom_default / "bom.html").read_text()
+    for cat in ("sensors", "compute", "power", "thermal", "fasteners", "cables", "printed"):
+        assert f"## {cat}" in md and f"subtotal {cat}" in html
+    assert "M3 x 10 mm" in md and "https://store.stereolabs.com/products/zed-x" in html
+    assert 'id="made-parts"' in html and "fits" in html
+
+
+def test_bom_follows_the_rig(bom_default, bom_changed):
+    a, b = read_bom(bom_default), read_bom(bom_changed)
+    assert float(a["handle"]["quantity"]) == 3 and float(b["handle"]["quantity"]) == 1
+    assert float(b["m3_screw:M3x10"]["quantity"]) == float(a["m3_screw:M3x10"]["quantity"]) - 8
+    assert float(b["m3_insert"]["quantity"]) == float(a["m3_insert"]["quantity"]) - 8
+    assert float(b["thermal_mount"]["mass_g"]) > float(a["thermal_mount"]["mass_g"])   # a longer bar
+    assert float(b["petg_filament"]["quantity"]) < float(a["petg_filament"]["quantity"])
+    assert float(b["total"]["mass_g"]) < float(a["total"]["mass_g"])
+
+
+# ------------------------------------------------------------------------------- bad input
+def _catalogue(tmp_path, edit) -> str:
+    data = yaml.safe_load(CATALOGUE.read_text())
+    edit(data)
+    p = tmp_path / "parts.yaml"
+    p.write_text(yaml.safe_dump(data, sort_keys=False))
+    return str(p)
+
+
+def _dup_number(d):
+    d["parts"]["usb_spare"] = dict(d["parts"]["boson_usb_cable"])
+
+
+def _unused(d):
+    d["parts"]["heat_sink_spare"] = dict(d["parts"]["heat_sink"])
+
+
+def _written_filament(d):
+    d["parts"]["petg_filament"]["supply"]["quantity"] = 1000
+
+
+@pytest.mark.parametrize("edit, expected", [
+    (lambda d: d["parts"]["zed_x"].pop("price"), "parts.zed_x.price: is missing"),
+    (lambda d: d["parts"]["zed_x"]["price"].update(currency="US$"), "parts.zed_x.price.currency: got 'US$'"),
+    (lambda d: d["parts"]["zed_x"]["price"].update(currency="GBP") or d["exchange_rates"].pop("GBP"),
+     "parts.zed_x.price.currency: is GBP, which has no rate"),
+    (_dup_number, "parts.usb_spare: has part number 'USB-C to USB-A cable, 0.3 m, right angle', already used by "
+                  "parts.boson_usb_cable"),
+    (lambda d: d["parts"].pop("quarter20_screw"), "parts.quarter20_screw: missing: the CAD assembly places "
+                                                  "quarter20_screw (screw_zed_x_0)"),
+    (lambda d: d["parts"].pop("heat_sink"), "parts.heat_sink: missing"),
+    (_unused, "parts.heat_sink_spare: used nowhere"),
+    (_written_filament, "parts.petg_filament.supply.quantity: is 1000, but quantity_from: printed_parts computes it"),
+])
+def test_bad_catalogue(tmp_path, capsys, edit, expected):
+    bad = _catalogue(tmp_path, edit)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "bom.csv").write_text("previous output\n")
+    code = build_main(["bom", "--catalogue", bad, "--out", str(out), "-q"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert expected in err and str(bad) in err, err
+    assert "Traceback" not in err
+    assert (out / "bom.csv").read_text() == "previous output\n"        # untouched
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "parts.yaml"]   # no staging left behind
+
+
+def test_bad_catalogue_names_the_line(tmp_path, capsys):
+    text = CATALOGUE.read_text().replace("currency: USD, checked: \"2026-11-01\", confidence: estimate}\n  boson_640:",
+                                         "currency: XYZ, checked: \"2026-11-01\", confidence: estimate}\n  boson_640:")
+    bad = tmp_path / "parts.yaml"
+    bad.write_text(text)
+    code = build_main(["bom", "--catalogue", str(bad), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    line = next(i for i, ln in enumerate(text.splitlines(), 1) if "XYZ" in ln)
+    assert code == 2 and f"{bad}:{line}: parts.zed_x.price.currency: got 'XYZ'" in err, err
+    assert not (tmp_path / "out").exists()
