@@ -1,10 +1,12 @@
 """Thermal intrinsics accuracy, side by side with the reference tools, on the same images.
 
 Renders a "real" synthetic set (default 40 images, a square 8x8 board so that mrgingham can run on it
-too), then calibrates it four ways and compares each result with the true lens (projection
-difference after the best-fit rotation, whole image and central 80%; calibration.validate):
+too), then calibrates it several ways and compares each result with the true lens (projection
+difference after the best-fit rotation, whole image and central 80%; calibration.validate), with
+calibrate thermal's verdict (ours only: the others have none) and the time, also as a ratio to ours:
 
-  ours/mrcal      calibrate thermal (our detector + in-process mrcal, LENSMODEL_OPENCV8)
+  ours (default)  calibrate thermal (our detector + in-process mrcal, default lens model)
+  ours/<model>    calibrate thermal --lens-model opencv8 | splined
   ours/opencv     calibrate thermal --solver opencv (our detector + cv2.fisheye)
   opencv          cv2.findChessboardCornersSB on 8-bit images + cv2.fisheye.calibrate
   mrgingham+mrcal mrgingham on 8-bit images + mrcal-calibrate-cameras (the command-line tool)
@@ -60,11 +62,11 @@ def mrcal_project(model):
     return lambda v: mrcal.project(np.ascontiguousarray(v), lm, it)
 
 
-def run_ours(src: Path, out: Path, solver: str):
+def run_ours(src: Path, out: Path, solver: str, lens_model: str | None = None):
     t = time.perf_counter()
     cmd = [sys.executable, "-m", "calibration.cli", "thermal", "--images", str(src), "--board",
            f"{BOARD[0]}x{BOARD[1]}", "--square", str(SQUARE), "--out", str(out), "--solver", solver,
-           "--json", "-q", "--exit-zero"]
+           "--json", "-q", "--exit-zero"] + (["--lens-model", lens_model] if lens_model else [])
     r = subprocess.run(cmd, cwd=REPO, capture_output=True, text=True)
     dt = time.perf_counter() - t
     if r.returncode != 0:
@@ -72,9 +74,17 @@ def run_ours(src: Path, out: Path, solver: str):
     s = json.loads(r.stdout)
     if solver == "opencv":
         p = np.array(s["intrinsics"])
-        return (lambda v: kb.project(v, p)), dt, dict(images=s["n_images_used"], verdict=s["verdict"]["headline"][:60])
+        return (lambda v: kb.project(v, p)), dt, _info(s)
     m = mrcal.cameramodel(str(out / "thermal.cameramodel"))
-    return mrcal_project(m), dt, dict(images=s["n_images_used"], verdict=s["verdict"]["headline"][:60])
+    return mrcal_project(m), dt, dict(_info(s), lensmodel=m.intrinsics()[0])
+
+
+def _info(s: dict) -> dict:
+    v = s["verdict"]
+    return dict(images=s["n_images_used"], rejected=s["n_rejected_images"],
+                verdict=("trusted" if v["trustworthy"] else "NOT trusted") +
+                f" ({100 * s['validity']['trusted_share']:.0f}% valid)",
+                why=v["headline"][:110])
 
 
 def run_opencv(files8: list[Path]):
@@ -139,7 +149,9 @@ def main() -> int:
     files8 = to8bit(src, work / "set8")
 
     rows = []
-    for name, fn in [("ours/mrcal (OPENCV8)", lambda: run_ours(src, work / "ours_mrcal", "mrcal")),
+    for name, fn in [("ours (default)", lambda: run_ours(src, work / "ours_default", "mrcal")),
+                     ("ours/opencv8", lambda: run_ours(src, work / "ours_opencv8", "mrcal", "opencv8")),
+                     ("ours/splined", lambda: run_ours(src, work / "ours_splined", "mrcal", "splined")),
                      ("ours/opencv (KB)", lambda: run_ours(src, work / "ours_opencv", "opencv")),
                      ("OpenCV SB + fisheye", lambda: run_opencv(files8)),
                      ("mrgingham + mrcal-cc", lambda: run_mrgingham(work / "set8", work / "mrgingham"))]:
@@ -150,14 +162,20 @@ def main() -> int:
         c = compare(proj, truth_unproject(truth), size)
         rows.append((name, c, dt, info))
 
-    print(f"\n{'method':24s} {'images':>6s} {'RMS px':>8s} {'central80':>9s} {'worst px':>8s} {'time s':>7s}  notes")
-    base = next((dt for _, c, dt, _ in rows if c is not None), None)
+    print(f"\n{'method':22s} {'images':>6s} {'RMS px':>8s} {'central80':>9s} {'worst px':>8s} {'time s':>7s} "
+          f"{'xours':>6s}  verdict")
+    base = rows[0][2]
     for name, c, dt, info in rows:
         if c is None:
-            print(f"{name:24s} {info.get('images', 0):6d} {'failed':>8s} {'':9s} {'':8s} {dt:7.1f}  {info}")
+            print(f"{name:22s} {info.get('images', 0):6d} {'failed':>8s} {'':9s} {'':8s} {dt:7.1f} "
+                  f"{dt / base:6.2f}  {info}")
             continue
-        print(f"{name:24s} {info.get('images', 0):6d} {c.rms_px:8.3f} {c.central_rms_px:9.3f} {c.max_px:8.3f} "
-              f"{dt:7.1f}  x{dt / base:.2f} time; {info.get('verdict', '')}")
+        print(f"{name:22s} {info.get('images', 0):6d} {c.rms_px:8.3f} {c.central_rms_px:9.3f} {c.max_px:8.3f} "
+              f"{dt:7.1f} {dt / base:6.2f}  {info.get('verdict', '-')}")
+    print("\nwhy (ours):")
+    for name, c, dt, info in rows:
+        if "why" in info:
+            print(f"  {name}: {info.get('lensmodel', '')} {info['why']}")
     print("\ntargets: RMS <= 0.100 px, central 80% <= 0.050 px (projection difference vs the true lens)")
     return 0
 

@@ -7,9 +7,9 @@ from typing import Sequence
 
 from platform_tools.cli.common import dispatch, tool_parser
 
-from . import detect_cmd, nominal_cmd, synth_cmd, thermal_cmd, validate_cmd
+from . import detect_cmd, extrinsics_cmd, nominal_cmd, rig_cmd, synth_cmd, thermal_cmd, validate_cmd
 
-COMMANDS = [nominal_cmd, synth_cmd, detect_cmd, thermal_cmd, validate_cmd]
+COMMANDS = [nominal_cmd, synth_cmd, detect_cmd, thermal_cmd, validate_cmd, extrinsics_cmd, rig_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -67,13 +67,22 @@ def best_rotation(v_truth: np.ndarray, q: np.ndarray, project: Project) -> np.nd
 
 def compare(project: Project, unproject_truth: Unproject, imagersize: tuple[int, int], *,
             grid_width: int = GRID_WIDTH, fit_rotation: bool = True,
-            core: np.ndarray | None = None, core_truth: np.ndarray | None = None) -> Comparison:
-    """Projection difference of a solved lens (``project``) against the truth (``unproject_truth``)."""
+            core: np.ndarray | None = None, core_truth: np.ndarray | None = None,
+            fit_fraction: float | None = None) -> Comparison:
+    """Projection difference of a solved lens (``project``) against the truth (``unproject_truth``).
+    ``fit_fraction``: fit the rotation only over that central part of the image (as mrcal's
+    projection_diff fits it in a focus region), e.g. to compare two solves that both go wrong where
+    there is no data; None: over the whole image."""
     import mrcal
     grid = imager_grid(imagersize, grid_width)
     q = grid.reshape(-1, 2)
     v = np.asarray(unproject_truth(q), dtype=float)
-    r = best_rotation(v, q, project) if fit_rotation else np.zeros(3)
+    if fit_rotation:
+        m = np.ones(len(q), bool) if fit_fraction is None else central_mask(grid, imagersize, fit_fraction).ravel()
+        m &= np.isfinite(v).all(axis=-1)
+        r = best_rotation(v[m], q[m], project)
+    else:
+        r = np.zeros(3)
     d = np.linalg.norm(project(mrcal.rotate_point_r(r, v)) - q, axis=-1).reshape(grid.shape[:2])
     d = np.where(np.isfinite(d), d, np.inf)
     cm = central_mask(grid, imagersize)

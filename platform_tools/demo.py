@@ -42,6 +42,8 @@ STEPS: list[Step] = [
          (sys.executable, "cad/build.py", "bom", "--out", "{out}"), "bom"),
     Step("assembly guide, BOM, wiring and printing pages with pictures from the CAD model (open index.html)",
          (sys.executable, "cad/build.py", "docs", "--out", "{out}"), "docs"),
+    Step("CAD extrinsics of every camera and the IMU (extrinsics.yaml, Kalibr camchain, URDF, ROS 2 launch, mrcal)",
+         _tool("calibrate") + ("extrinsics", "--from-cad", "--out", "{out}"), "calibration/extrinsics"),
     Step("on-device configuration (compose, systemd, udev, ROS 2 launch) from the rig description",
          _tool("platform_tools") + ("firmware", "render", "--out", "{out}"), "firmware"),
     Step("a simulated 5 s recording (MCAP, ROS 2 messages) with its injected faults in truth.json",

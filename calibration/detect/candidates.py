@@ -12,7 +12,6 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from scipy.ndimage import map_coordinates
 
 from .refine import image_noise
 
@@ -34,8 +33,17 @@ def normalise(img: np.ndarray) -> np.ndarray:
     f = img.astype(np.float32)
     # column pattern: median over rows of what a horizontal smoothing takes away
     hp = f - cv2.blur(f, (9, 1), borderType=cv2.BORDER_REFLECT)
-    f = f - np.median(hp[::4], axis=0)[None, :]
+    f = f - np.median(hp[::8], axis=0)[None, :]
     return f
+
+
+def sample(g: np.ndarray, px: np.ndarray, py: np.ndarray) -> np.ndarray:
+    """Bilinear samples of ``g`` at (px, py) (any equal shapes, fewer than 32767 rows), edge pixels
+    repeated outside."""
+    shape = px.shape
+    mx = np.ascontiguousarray(px.reshape(shape[0], -1), dtype=np.float32)
+    my = np.ascontiguousarray(py.reshape(shape[0], -1), dtype=np.float32)
+    return cv2.remap(g, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE).reshape(shape)
 
 
 def _smooth(f: np.ndarray, size: int) -> np.ndarray:
@@ -67,8 +75,9 @@ def local_maxima(S: np.ndarray, threshold: float, radius: int = 2) -> np.ndarray
     return np.stack([xs, ys], axis=1).astype(np.float64)
 
 
-def ring_check(g: np.ndarray, xy: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Ring test at ``radius``: (ok, dirs (n,2), strength, sign) for each point (vectorised)."""
+def ring_check(g: np.ndarray, xy: np.ndarray, radius) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Ring test at ``radius`` (a number, or one per point): (ok, dirs (n,2), strength, sign) for
+    each point (vectorised)."""
     n = len(xy)
     N = RING_SAMPLES
     dirs = np.zeros((n, 2))
@@ -78,12 +87,15 @@ def ring_check(g: np.ndarray, xy: np.ndarray, radius: float) -> tuple[np.ndarray
     if n == 0:
         return ok, dirs, strength, sign
     ang = np.arange(N) * (2 * np.pi / N)
-    px = xy[:, 0:1] + radius * np.cos(ang)[None, :]
-    py = xy[:, 1:2] + radius * np.sin(ang)[None, :]
+    r = np.broadcast_to(np.asarray(radius, float), (n,))[:, None]
+    px = xy[:, 0:1] + r * np.cos(ang)[None, :]
+    py = xy[:, 1:2] + r * np.sin(ang)[None, :]
     H, W = g.shape
     inside = (px.min(1) >= 0) & (py.min(1) >= 0) & (px.max(1) <= W - 1) & (py.max(1) <= H - 1)
-    vals = map_coordinates(g, [py.ravel(), px.ravel()], order=1, mode="nearest").reshape(n, N)
-    vals = vals - np.median(vals, axis=1, keepdims=True)
+    vals = sample(g, px, py).astype(np.float64)
+    # the level between the sectors: the mean of a ring around an X-corner (cheaper than the
+    # median and as good for the sign pattern; the checks below reject what it does not fit)
+    vals = vals - vals.mean(axis=1, keepdims=True)
     pos = vals > 0
     change = pos != np.roll(pos, -1, axis=1)          # sign change between sample k and k+1
     four = inside & (change.sum(1) == 4)
@@ -120,24 +132,27 @@ def ring_check(g: np.ndarray, xy: np.ndarray, radius: float) -> tuple[np.ndarray
     return ok, dirs, strength, sign
 
 
-def find_candidates(f: np.ndarray, sigma: float = 1.2, radii=(3.0, 5.0)) -> tuple[Candidates, np.ndarray, np.ndarray]:
-    """Candidates in a normalised image ``f``; also the contrast-normalised smoothed image and the
-    local standard deviation (image units)."""
+def find_candidates(f: np.ndarray, sigma: float = 1.2, radii=(3.0, 5.0), noise: float | None = None):
+    """Candidates in a normalised image ``f``; also the contrast-normalised smoothed image ``g``,
+    its saddle response ``S`` and the local standard deviation (image units)."""
     mu, sd = local_contrast(f)
     # contrast normalisation, but never amplifying flat regions past a few times the noise
-    floor = max(NOISE_FLOOR * image_noise(f), 1e-6)
+    if noise is None:
+        noise = image_noise(f)
+    floor = max(NOISE_FLOOR * noise, 1e-6)
     g = cv2.GaussianBlur((f - mu) / np.maximum(sd, floor), (0, 0), sigma)
     S = saddle_response(g)
     xy = local_maxima(S, threshold=0.002)
     best = None
     for r in radii:
-        ok, dirs, strength, sign = ring_check(g, xy, r)
         if best is None:
-            best = [ok, dirs, strength, sign]
-        else:
-            take = ok & ~best[0]
-            best[0] = best[0] | ok
+            best = list(ring_check(g, xy, r))
+        else:                              # the next radius only for those that failed
+            rest = np.flatnonzero(~best[0])
+            ok, dirs, strength, sign = ring_check(g, xy[rest], r)
+            take = rest[ok]
+            best[0][take] = True
             for arr, new in zip(best[1:], (dirs, strength, sign)):
-                arr[take] = new[take]
+                arr[take] = new[ok]
     ok = best[0]
-    return Candidates(xy[ok], best[1][ok], best[2][ok], best[3][ok]), g, sd
+    return Candidates(xy[ok], best[1][ok], best[2][ok], best[3][ok]), g, S, sd

@@ -7,7 +7,8 @@ import numpy as np
 
 from .candidates import find_candidates, normalise
 from .grid import anchor, label, link, orient
-from .refine import levels, refine
+from .grow import grow, lattice_outliers
+from .refine import image_noise, levels, refine
 
 MIN_CORNERS = 6
 
@@ -65,32 +66,42 @@ def detect_corners(image: np.ndarray, board: tuple[int, int] = (10, 7)) -> Detec
     f = normalise(to_float(image))
     if float(f.max() - f.min()) <= 0:
         return _empty((W, H), "the image is flat (every pixel the same)")
-    cands, g, local_sd = find_candidates(f)
+    noise = image_noise(f)
+    cands, g, S, local_sd = find_candidates(f, noise=noise)
     if len(cands.xy) < MIN_CORNERS:
         return _empty((W, H), "no checkerboard corners found", len(cands.xy))
     slots = link(cands)
     idx, ij = label(cands, slots)
     if len(idx) < MIN_CORNERS:
         return _empty((W, H), "no grid of corners found", len(cands.xy))
-    xy = cands.xy[idx]
+    # fill the holes and extend the runs the linking missed
+    xy, ij, _ = grow(g, S, cands.xy[idx], ij, cands.strength[idx], (W, H))
+    if len(xy) < MIN_CORNERS:
+        return _empty((W, H), "no grid of corners found", len(cands.xy))
     ij, why = orient(xy, ij, W, H)
     if why:
         return _empty((W, H), why, len(cands.xy))
+    keep = ij[:, 0] >= 0
+    xy, ij = xy[keep], ij[keep]
+    if len(xy) < MIN_CORNERS:
+        return _empty((W, H), "no grid of corners found", len(cands.xy))
+    ij = ij - ij.min(axis=0)
     if ij[:, 0].max() < 1 or ij[:, 1].max() < 1:
         return _empty((W, H), "only one row of corners found", len(cands.xy))
     ij, why = anchor(g, xy, ij, W, H)
     if ij is None:
         return _empty((W, H), why, len(cands.xy))
     # spacing to the nearest grid neighbour, for window sizes
-    pos = {tuple(k): p for k, p in zip(ij, xy)}
+    pos = {tuple(k): p for k, p in zip(ij.tolist(), xy)}
     spacing = np.array([min([np.linalg.norm(pos[n] - p) for n in
                              ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)) if n in pos] or [8.0])
-                        for (i, j), p in zip(map(tuple, ij), xy)])
+                        for (i, j), p in zip(ij.tolist(), xy)])
     fine = refine(f, xy, spacing)
+    fine[lattice_outliers(fine, ij)] = np.nan
     ok = np.isfinite(fine[:, 0])
     corners = np.full((W * H, 2), np.nan)
     lv = -np.ones(W * H, int)
     k = ij[:, 1] * W + ij[:, 0]
     corners[k[ok]] = fine[ok]
-    lv[k[ok]] = levels(f, fine[ok], local_sd)
+    lv[k[ok]] = levels(f, fine[ok], local_sd, noise)
     return Detection((W, H), corners, lv, "", len(cands.xy))

@@ -141,6 +141,8 @@ def label(c: Candidates, slots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                     axis_of[q], orient[q], lab[q] = tuple(ax), tuple(ori), new
                     seen[q] = True
                     queue.append(q)
+        if len(lab) - len(conflict) <= len(best_idx):
+            continue                       # cannot beat the best component: skip the bookkeeping
         idx = np.array([k for k in lab if k not in conflict], int)
         ij = np.array([lab[k] for k in idx], int).reshape(-1, 2)
         # one candidate per label
@@ -167,28 +169,58 @@ def _step_vectors(xy: np.ndarray, ij: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return (np.mean(di, axis=0) if di else zero), (np.mean(dj, axis=0) if dj else zero)
 
 
+TRIM_EXTRA = 2            # at most this many surplus lattice lines along an axis are trimmed off
+TRIM_MAX_DROPPED = 3      # ... holding at most this many corners in all (clutter, not board)
+
+
+def _best_window(ij: np.ndarray, W: int, H: int) -> tuple[np.ndarray | None, int]:
+    """The W x H window (in label units, ij starting at 0) holding the most corners, if it is the
+    only best one and what it leaves out is a few stray corners; (offset, n dropped) or (None, n)."""
+    ni, nj = ij.max(axis=0) + 1
+    wi, wj = min(ni, W), min(nj, H)
+    occ = np.zeros((nj, ni), int)
+    occ[ij[:, 1], ij[:, 0]] = 1
+    cs = np.pad(occ.cumsum(0).cumsum(1), ((1, 0), (1, 0)))
+    counts = cs[wj:, wi:] - cs[:-wj, wi:] - cs[wj:, :-wi] + cs[:-wj, :-wi]      # (nj-wj+1, ni-wi+1)
+    flat = np.sort(counts.ravel())[::-1]
+    dropped = len(ij) - int(flat[0])
+    if (len(flat) > 1 and flat[1] == flat[0]) or dropped > TRIM_MAX_DROPPED:
+        return None, dropped
+    oj, oi = np.unravel_index(int(np.argmax(counts)), counts.shape)
+    return np.array([oi, oj]), dropped
+
+
 def orient(xy: np.ndarray, ij: np.ndarray, W: int, H: int) -> tuple[np.ndarray, str]:
     """Right-handed labels, turned so +i points most to the right among those that fit W x H;
-    returns (ij normalised to start at 0, reason if none fits)."""
+    returns (ij normalised to start at 0, reason if none fits). A grid one or two lattice lines
+    larger than the board (a background corner linked to it) is trimmed to the W x H window
+    holding the most corners, when that window is unique and leaves out at most a few strays;
+    trimmed-off corners get ij = -1 (the caller drops them)."""
     di, dj = _step_vectors(xy, ij)
     if di[0] * dj[1] - di[1] * dj[0] < 0:          # mirrored: swap the axes
         ij = ij[:, ::-1]
         di, dj = dj, di
-    best, best_score = None, -np.inf
+    fits, trims = [], []
     for k in range(4):
-        ni = ij[:, 0].max() - ij[:, 0].min() + 1
-        nj = ij[:, 1].max() - ij[:, 1].min() + 1
+        ij0 = ij - ij.min(axis=0)
+        ni, nj = ij0.max(axis=0) + 1
+        score = di[0] / (np.linalg.norm(di) + 1e-12)
         if ni <= W and nj <= H:
-            score = di[0] / (np.linalg.norm(di) + 1e-12)
-            if score > best_score:
-                best, best_score = ij.copy(), score
+            fits.append((score, ij0.copy()))
+        elif ni <= W + TRIM_EXTRA and nj <= H + TRIM_EXTRA:
+            off, _ = _best_window(ij0, W, H)
+            if off is not None:
+                out = ij0 - off
+                inside = (out[:, 0] >= 0) & (out[:, 1] >= 0) & (out[:, 0] < W) & (out[:, 1] < H)
+                out[~inside] = -1
+                trims.append((score, out))
         ij = np.stack([ij[:, 1], -ij[:, 0]], axis=1)   # turn 90 deg (keeps handedness)
         di, dj = dj, -di
-    if best is None:
-        ni = ij[:, 0].max() - ij[:, 0].min() + 1
-        nj = ij[:, 1].max() - ij[:, 1].min() + 1
-        return ij, f"found a {max(ni, nj)}x{min(ni, nj)} grid of corners, larger than the {W}x{H} board"
-    return best - best.min(axis=0), ""
+    for options in (fits, trims):
+        if options:
+            return max(options, key=lambda o: o[0])[1], ""
+    ni, nj = ij.max(axis=0) - ij.min(axis=0) + 1
+    return ij, f"found a {max(ni, nj)}x{min(ni, nj)} grid of corners, larger than the {W}x{H} board"
 
 
 def _end_state(g: np.ndarray, pos: dict, axis: int, end: int, n_other: int) -> str:

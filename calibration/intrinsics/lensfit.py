@@ -74,3 +74,31 @@ def mrcal_unprojector(lensmodel: str, intrinsics: np.ndarray) -> Callable[[np.nd
     import mrcal
     return lambda q: mrcal.unproject(np.ascontiguousarray(q, dtype=float), lensmodel,
                                      np.asarray(intrinsics, dtype=float), normalize=True)
+
+
+def robust_unproject(q: np.ndarray, lensmodel: str, intrinsics: np.ndarray) -> np.ndarray:
+    """mrcal.unproject, normalised, for pixels where mrcal 2.2's numerical inversion of a rational
+    (OPENCV8) model occasionally fails at one isolated pixel (it returns a zero vector while its
+    neighbours half a pixel away are fine): there, the mean of the rays of two neighbours on opposite
+    sides (exact to second order in the half pixel)."""
+    import mrcal
+    q = np.ascontiguousarray(q, dtype=float)
+    intrinsics = np.asarray(intrinsics, dtype=float)
+    v = mrcal.unproject(q, lensmodel, intrinsics, normalize=True)
+
+    def ok(x: np.ndarray) -> np.ndarray:
+        return np.isfinite(x).all(axis=-1) & (np.linalg.norm(x, axis=-1) > 0.5)
+
+    for d in ((0.5, 0.0), (0.0, 0.5), (0.5, 0.5), (0.5, -0.5), (1.0, 0.0)):
+        bad = ~ok(v)
+        if not bad.any():
+            break
+        d = np.array(d)
+        a = mrcal.unproject(np.ascontiguousarray(q[bad] - d), lensmodel, intrinsics, normalize=True)
+        b = mrcal.unproject(np.ascontiguousarray(q[bad] + d), lensmodel, intrinsics, normalize=True)
+        m = a + b
+        good = ok(a) & ok(b)
+        fixed = v[bad]
+        fixed[good] = m[good] / np.linalg.norm(m[good], axis=-1, keepdims=True)
+        v[bad] = fixed
+    return v

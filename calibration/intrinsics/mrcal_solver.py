@@ -152,6 +152,24 @@ def horizontal_fov_deg(lensmodel: str, intrinsics: np.ndarray, imagersize: tuple
     return math.degrees(math.atan2(abs(v[0, 0]), v[0, 2]) + math.atan2(abs(v[1, 0]), v[1, 2]))
 
 
+def splined_fov_deg(lensmodel: str, intrinsics: np.ndarray, imagersize: tuple[int, int], nx: int, ny: int) -> float:
+    """The smallest fov_x_deg whose knot grid (Nx x Ny, equal spacing in stereographic u = 2 tan(theta/2))
+    covers every pixel of the imager's border through the given lens, plus one knot spacing."""
+    import mrcal
+    w, h = imagersize
+    t = np.linspace(0, 1, 41)
+    border = np.concatenate([np.column_stack([t * (w - 1), np.zeros_like(t)]),
+                             np.column_stack([t * (w - 1), np.full_like(t, h - 1)]),
+                             np.column_stack([np.zeros_like(t), t * (h - 1)]),
+                             np.column_stack([np.full_like(t, w - 1), t * (h - 1)])])
+    v = mrcal.unproject(border, lensmodel, intrinsics, normalize=True)
+    th = np.arctan2(np.hypot(v[:, 0], v[:, 1]), v[:, 2])
+    u = 2 * np.tan(th / 2)[:, None] * v[:, :2] / np.maximum(np.hypot(v[:, 0], v[:, 1]), 1e-12)[:, None]
+    ux = max(float(np.abs(u[:, 0]).max()), float(np.abs(u[:, 1]).max()) * (nx - 1) / (ny - 1))
+    ux *= (nx - 1) / (nx - 3)          # one spare knot spacing on each side
+    return math.degrees(4 * math.atan(ux / 2))
+
+
 def _expand(pre: dict, lensmodel: str, imagersize: tuple[int, int]) -> tuple[np.ndarray, bool]:
     """Intrinsics of ``lensmodel`` seeded from the stereographic presolve; and whether to optimise
     the core."""
@@ -172,27 +190,124 @@ def _rms(oi: dict) -> float:
     return float(mrcal.optimize(**oi)["rms_reproj_error__pixels"])
 
 
-def _repose(obs: BoardObservations, oi: dict, rounds: int = 3) -> None:
-    """Board poses seeded through a stereographic lens can hold the solve in a wrong minimum (a
-    fisheye differs from stereographic by tens of pixels at the image edges): re-estimate every
-    pose by PnP through the model solved so far, re-solve, and keep it while the fit improves."""
+def _board_errors(obs: BoardObservations, lensmodel: str, intrinsics: np.ndarray, i: int, rt: np.ndarray) -> float:
     import mrcal
-    idx = np.column_stack([np.arange(obs.n), np.zeros(obs.n)]).astype(np.int32)
-    best = _rms(oi)
-    for _ in range(rounds):
-        saved = {k: np.array(oi[k], copy=True) for k in ("intrinsics", "frames_rt_toref")}
+    m = obs.seen()[i]
+    p = mrcal.transform_point_rt(rt, obs.board_points_m()[m])
+    q = mrcal.project(p, lensmodel, intrinsics)
+    return float(np.sqrt(np.mean(np.sum((q - obs.corners[i, m]) ** 2, axis=-1))))
+
+
+def _fix_poses(obs: BoardObservations, oi: dict, *, factor: float = 2.0) -> list[int]:
+    """A small or distant board has two poses that look alike (tilted towards or away from the
+    camera: the planar pose ambiguity), and a stereographic seed often picks the wrong one; mrcal
+    cannot leave that minimum, and the board then looks like an outlier (8 px RMS on the bench set,
+    3 of 39 images thrown away). For every board, both IPPE solutions through the model solved so far
+    are tried (rays unprojected by the model, so the lens's distortion is out of the way); a pose
+    that fits the board ``factor`` times better replaces the current one. Returns the boards changed."""
+    import cv2
+    import mrcal
+    lm, intr = oi["lensmodel"], oi["intrinsics"][0]
+    objp = obs.board_points_m()
+    frames = oi["frames_rt_toref"]
+    changed = []
+    for i in range(obs.n):
+        m = obs.seen()[i]
+        if m.sum() < 4:
+            continue
+        v = mrcal.unproject(np.ascontiguousarray(obs.corners[i, m]), lm, intr)
+        if not np.all(np.isfinite(v)) or np.any(v[:, 2] <= 1e-6):
+            continue
+        xy = np.ascontiguousarray(v[:, :2] / v[:, 2:3])
+        cur = _board_errors(obs, lm, intr, i, frames[i])
+        best, best_err = None, cur
         try:
-            Rt = mrcal.estimate_monocular_calobject_poses_Rt_tocam(
-                idx, oi["observations_board"], obs.square_m, [(oi["lensmodel"], oi["intrinsics"][0])])
-            oi["frames_rt_toref"] = mrcal.rt_from_Rt(Rt)
-            rms = _rms(oi)
-        except Exception:
-            rms = float("inf")
-        if not rms < 0.99 * best:
-            oi.update(saved)
-            mrcal.optimize(**oi)
-            return
-        best = rms
+            _, rvecs, tvecs, _ = cv2.solvePnPGeneric(objp[m], xy, np.eye(3), None, flags=cv2.SOLVEPNP_IPPE)
+        except cv2.error:
+            continue
+        for r, t in zip(rvecs, tvecs):
+            r, t = cv2.solvePnPRefineLM(objp[m], xy, np.eye(3), None, r.copy(), t.copy())
+            rt = np.concatenate([np.ravel(r), np.ravel(t)])
+            err = _board_errors(obs, lm, intr, i, rt)
+            if np.isfinite(err) and err < best_err:
+                best, best_err = rt, err
+        if best is not None and best_err * factor < cur:
+            frames[i] = best
+            changed.append(i)
+    return changed
+
+
+def _repose(obs: BoardObservations, oi: dict, rounds: int = 3) -> list[int]:
+    """Re-solve while :func:`_fix_poses` finds boards in the wrong one of their two poses."""
+    import mrcal
+    fixed: list[int] = []
+    for _ in range(rounds):
+        changed = _fix_poses(obs, oi)
+        if not changed:
+            break
+        fixed += changed
+        mrcal.optimize(**oi)
+    return sorted(set(fixed))
+
+
+# The unregularised polish is kept only when it stays sane: no distortion term runs off along the
+# rational model's numerator/denominator degeneracy, and the fit is no worse than the regularised one.
+UNREGULARISED_MAX_COEFF = 1e3
+
+
+def _unregularised(oi: dict) -> tuple[dict, str]:
+    """mrcal's regularisation pulls every distortion term towards zero. An OPENCV8 fit of a 95 deg
+    lens needs terms of 3-7, so the pull bends the model where data is thin: on the bench set the
+    extreme image corners came out 13 px off (0.67 px RMS over the image) with regularisation, 0.26 px
+    worst (0.03 px RMS) without. So after the regularised solve (which converges reliably), the
+    model is polished without it, keeping mrcal's outlier decisions. Splined models keep it: their
+    knots where no board was seen are defined only by it. Returns the inputs to use and a note."""
+    import mrcal
+    if lensmodels.is_splined(oi["lensmodel"]) or not oi.get("do_apply_regularization", False):
+        return oi, ""
+    rms0 = _rms_of(oi)
+    trial = {k: (np.array(v, copy=True) if isinstance(v, np.ndarray) else v) for k, v in oi.items()}
+    trial.update(do_apply_regularization=False, do_apply_outlier_rejection=False)
+    try:
+        stats = mrcal.optimize(**trial)
+        rms = float(stats["rms_reproj_error__pixels"])
+    except Exception as exc:       # noqa: BLE001 - mrcal raises plain errors on a singular problem
+        return oi, f"unregularised polish failed ({type(exc).__name__}); regularised model kept"
+    d = trial["intrinsics"][0][4:]
+    if not (np.all(np.isfinite(trial["intrinsics"])) and np.all(np.abs(d) < UNREGULARISED_MAX_COEFF)
+            and rms <= 1.05 * rms0 + 1e-6):
+        return oi, (f"unregularised polish rejected (RMS {rms:.3f} vs {rms0:.3f} px, largest term "
+                    f"{np.max(np.abs(d)):.3g}); regularised model kept: it may be biased where data is thin")
+    note = "final solve without mrcal's regularisation (it biases a 95 deg OPENCV8 fit where data is thin)"
+    if not _uncertainty_defined(trial):
+        # the unregularised problem is singular (the rational terms' near-degeneracy): mrcal cannot
+        # propagate noise through it. Keep the polished lens, but record the problem with mrcal's
+        # regularisation on, as a weak prior that makes the uncertainty defined (a tiny cost at the
+        # polished solution, whose effect on the uncertainty is second-order)
+        trial["do_apply_regularization"] = True
+        note += ("; the unregularised problem is singular, so the uncertainty is computed with the "
+                 "regularisation as a prior")
+    return trial, note
+
+
+def _uncertainty_defined(oi: dict) -> bool:
+    import mrcal
+    try:
+        m = mrcal.cameramodel(optimization_inputs=oi, icam_intrinsics=0)
+        w, h = m.imagersize()
+        v = mrcal.unproject(np.array([(w - 1) / 2, (h - 1) / 2]), *m.intrinsics(), normalize=True)
+        s = mrcal.projection_uncertainty(v, model=m, atinfinity=True, what="worstdirection-stdev")
+        return bool(np.all(np.isfinite(s)))
+    except Exception:      # noqa: BLE001
+        return False
+
+
+def _rms_of(oi: dict) -> float:
+    """RMS pixel residual of the corners mrcal counts as inliers (weight > 0)."""
+    ob = oi["observations_board"]
+    use = ob[..., 2] > 0
+    d2 = np.sum((ob[..., :2] - predicted(oi)) ** 2, axis=-1)
+    return float(np.sqrt(np.mean(d2[use]))) if use.any() else float("nan")
 
 
 def _final(oi: dict) -> dict:
@@ -224,14 +339,31 @@ def solve(obs: BoardObservations, *, lensmodel: str | None, focal_px: float,
         raise SolveError("the stereographic presolve diverged: check --board and --square")
     fov = horizontal_fov_deg("LENSMODEL_STEREOGRAPHIC", pre["intrinsics"][0], obs.imagersize)
     full_name = lensmodels.resolve(lensmodel, obs.imagersize, fov * 1.05)
+    notes: list[str] = []
+    if lensmodels.is_splined(full_name):
+        # a stereographic presolve underestimates a 95 deg lens's field (79 deg on the bench set), and
+        # the spline's knots must cover the whole imager, corners included: measure the field
+        # through an OPENCV8 solve, whose board poses also seed the spline
+        o8 = _base_inputs(obs, "LENSMODEL_OPENCV8", _expand(pre, "LENSMODEL_OPENCV8", obs.imagersize)[0],
+                          pre["frames_rt_toref"])
+        mrcal.optimize(**o8)
+        _repose(obs, o8)
+        meta = mrcal.lensmodel_metadata_and_config(full_name)
+        fov_x = splined_fov_deg("LENSMODEL_OPENCV8", o8["intrinsics"][0], obs.imagersize, meta["Nx"], meta["Ny"])
+        if lensmodel is not None and lensmodel.strip().lower() in lensmodels.SHORT_NAMES:
+            full_name = lensmodels.splined_name(obs.imagersize, fov_x, meta["Nx"])
+        pre["frames_rt_toref"] = o8["frames_rt_toref"]
 
     for _round in range(max_image_rejections + 1):
         intr, opt_core = _expand(pre, full_name, obs.imagersize)
         oi = _base_inputs(obs, full_name, intr, pre["frames_rt_toref"])
         oi["do_optimize_intrinsics_core"] = opt_core
         mrcal.optimize(**oi)     # a first pass without outlier rejection from the fitted seed
-        _repose(obs, oi)
+        fixed = _repose(obs, oi)
+        if fixed:
+            notes.append(f"board pose ambiguity resolved (IPPE) for {', '.join(obs.names[i] for i in fixed)}")
         _final(oi)
+        oi, note = _unregularised(oi)
         res, inlier, per_image, rms = residual_summary(obs, oi)
         med = float(np.median(per_image))
         share = 1.0 - inlier.sum(axis=1) / np.maximum(obs.seen().sum(axis=1), 1)
@@ -257,5 +389,7 @@ def solve(obs: BoardObservations, *, lensmodel: str | None, focal_px: float,
     w = obs.board[0]
     for i, k in zip(*np.nonzero(outl)):
         rejected_corners.append((obs.names[i], int(k % w), int(k // w), float(np.linalg.norm(res[i, k]))))
+    if note:
+        notes.append(note)
     return Solution(full_name, oi["intrinsics"][0].copy(), obs.imagersize, obs, oi, rms, per_image, res,
-                    inlier, rejected, rejected_corners)
+                    inlier, rejected, rejected_corners, notes=notes)

@@ -9,8 +9,11 @@ import numpy as np
 
 from .. import formats
 from ..report import analysis, html
+from ..report.validity import validity
 from ..report.verdict import Verdict, judge
+from . import crossval
 from . import kannala_brandt as kb
+from .lensfit import imager_grid
 from .mrcal_solver import Solution
 
 
@@ -21,35 +24,52 @@ class Outputs:
     verdict: Verdict
 
 
-def _cameramodel_text(solution: Solution, note: str, rational: formats.Representation | None):
+def _cameramodel(solution: Solution, rational: formats.Representation | None):
     import mrcal
     if solution.lensmodel == kb.NAME:
         # mrcal has no Kannala-Brandt: write the nearest OPENCV8, without optimization_inputs
         p = np.concatenate([[rational.K[0, 0], rational.K[1, 1], rational.K[0, 2], rational.K[1, 2]], rational.D])
-        model = mrcal.cameramodel(intrinsics=("LENSMODEL_OPENCV8", p), imagersize=solution.imagersize)
-    else:
-        model = solution.cameramodel()
+        return mrcal.cameramodel(intrinsics=("LENSMODEL_OPENCV8", p), imagersize=solution.imagersize)
+    return solution.cameramodel()
+
+
+def _cameramodel_text(model, note: str):
     buf = io.StringIO()
     model.write(buf, note=note)
-    return buf.getvalue(), model
+    return buf.getvalue()
 
 
-def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: str) -> Outputs:
+def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: str,
+          cross_validate: bool = True) -> Outputs:
     lens = formats.Lens(solution.lensmodel, solution.intrinsics, solution.imagersize)
     ros = formats.nearest_for_ros(lens)
     kal = formats.nearest_kalibr(lens)
     rational = formats.representation(lens, "rational_polynomial") if solution.lensmodel == kb.NAME else None
     note = (f"thermal intrinsics from calibrate thermal ({solution.solver}, {solution.lensmodel}), "
             f"rig hash {rig_hash[:12]}")
-    cm_text, model = _cameramodel_text(solution, note, rational)
+    if rational is not None:
+        note += (f". NOT an mrcal solve: OpenCV fisheye (Kannala-Brandt) intrinsics "
+                 f"{' '.join(f'{x:.9g}' for x in solution.intrinsics)} (fx fy cx cy k1 k2 k3 k4), expressed as "
+                 f"the nearest LENSMODEL_OPENCV8 (a fit over the whole imager: RMS {rational.fit.rms_px:.3f} px, "
+                 f"worst {rational.fit.max_px:.3f} px); no optimization_inputs, so no mrcal uncertainty. "
+                 f"The exact model is in thermal_camera_info.yaml (equidistant) and kalibr_camchain.yaml")
+    model = _cameramodel(solution, rational)
 
     obs = solution.observations
     cov = analysis.coverage(obs.corners, solution.inlier, solution.imagersize)
-    unc = analysis.uncertainty(model) if solution.optimization_inputs else None
+    unc = analysis.uncertainty(model, n_width=crossval.GRID_WIDTH) if solution.optimization_inputs else None
+    cv = crossval.cross_validate(solution) if cross_validate else None
+    grid = imager_grid(solution.imagersize, crossval.GRID_WIDTH)
+    val = validity(grid, cov.points, solution.imagersize,
+                   halves_diff_px=None if cv is None else cv.diff_px,
+                   uncertainty_px=None if unc is None else unc.stdev_px)
+    model.valid_intrinsics_region(val.region if len(val.region) >= 4 else np.zeros((0, 2)))
+    cm_text = _cameramodel_text(model, note)
     verdict = judge(region_counts=cov.region_counts(), rms_px=solution.rms_px, n_images=obs.n,
                     n_rejected_images=len(solution.rejected_images),
                     uncertainty_central_px=None if unc is None else unc.central_max_px,
-                    uncertainty_max_px=None if unc is None else unc.max_px)
+                    uncertainty_max_px=None if unc is None else unc.max_px,
+                    validity=val, cross_validated=None if not cross_validate else cv is not None)
     fmt = {"ROS camera_info": ros.summary(), "Kalibr camchain": kal.summary(),
            "OpenCV YAML": ros.summary()}
     if rational is not None:
@@ -69,6 +89,7 @@ def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: s
         regions=cov.region_counts(),
         uncertainty=None if unc is None else dict(central_max_px=unc.central_max_px, max_px=unc.max_px,
                                                   observed_noise_px=unc.observed_noise_px),
+        cross_validation=None if cv is None else cv.summary(), validity=val.summary(),
         formats=fmt, notes=list(solution.notes), rig_hash=rig_hash, verdict=verdict.to_dict())
     files = {
         "thermal.cameramodel": cm_text,
@@ -78,6 +99,6 @@ def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: s
         "kalibr_camchain.yaml": formats.kalibr_camchain(kal, solution.imagersize,
                                                         rostopic=f"/{camera_name}/image_raw"),
         "corners.vnl": corners_vnl,
-        "report.html": html.render(summary, verdict, html.plots(solution, cov, unc)),
+        "report.html": html.render(summary, verdict, html.plots(solution, cov, unc, cv, val)),
     }
     return Outputs(files, summary, verdict)

@@ -10,7 +10,7 @@ from .analysis import Coverage, Uncertainty
 from .verdict import Verdict
 
 
-def plots(solution, coverage: Coverage, unc: Uncertainty | None) -> dict[str, str]:
+def plots(solution, coverage: Coverage, unc: Uncertainty | None, cv=None, val=None) -> dict[str, str]:
     obs = solution.observations
     size = solution.imagersize
     out = {
@@ -32,6 +32,12 @@ def plots(solution, coverage: Coverage, unc: Uncertainty | None) -> dict[str, st
                                          unit="px", label_cells=False)
     else:
         out["uncertainty"] = ""
+    poly = None if val is None else val.region
+    out["halves"] = "" if cv is None else svg.heatmap(
+        size, cv.diff_px, vmax=1.0, title="cross-validation: halves disagree by", unit="px", polygon=poly)
+    out["validity"] = "" if val is None else svg.heatmap(
+        size, np.where(val.trusted, 0.0, 1.0), vmax=1.0, title="trusted (blue) / not (red); green: valid region",
+        unit="", polygon=poly, points=coverage.points)
     return out
 
 

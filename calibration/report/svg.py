@@ -35,7 +35,8 @@ def _svg(width: int, height: int, body: list[str], title: str) -> str:
 
 
 def heatmap(imagersize, cell_values: np.ndarray, *, vmax: float, title: str, unit: str,
-            label_cells: bool = False, points: np.ndarray | None = None) -> str:
+            label_cells: bool = False, points: np.ndarray | None = None,
+            polygon: np.ndarray | None = None) -> str:
     """Cells (ny, nx) tiling the image, coloured by value / vmax; optional points drawn on top."""
     s, hh, m = _frame(imagersize)
     ny, nx = cell_values.shape
@@ -54,6 +55,10 @@ def heatmap(imagersize, cell_values: np.ndarray, *, vmax: float, title: str, uni
         step = max(1, len(points) // 4000)
         for x, y in points[::step]:
             body.append(f'<circle cx="{m + x * s:.1f}" cy="{m + y * s:.1f}" r="0.8" fill="#000" opacity="0.5"/>')
+    if polygon is not None and len(polygon) >= 4:
+        pts = " ".join(f"{m + x * s:.1f},{m + y * s:.1f}" for x, y in polygon)
+        body.append(f'<polygon points="{pts}" fill="none" stroke="#1a9850" stroke-width="2.5" '
+                    f'stroke-dasharray="6,3"/>')
     body.append(f'<rect x="{m}" y="{m}" width="{W_PX}" height="{hh}" fill="none" stroke="#333"/>')
     body.append(f'<text x="{m}" y="{m - 8}" font-size="12">{escape(title)} (colour scale 0 .. {vmax:.3g} {unit})</text>')
     return _svg(W_PX + 2 * m, hh + 2 * m, body, title)

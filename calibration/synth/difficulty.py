@@ -37,6 +37,10 @@ class Difficulty:
     gain_nonuniformity: float                # low-frequency pixel gain non-uniformity (relative)
     column_fpn_k: float                      # column fixed-pattern noise (kelvin, std)
     noise_k: float                           # temporal noise (kelvin, std; Boson NETD is ~0.05 K)
+    # of the edge placements, the share over an image corner (the rest: over an edge). A fisheye's
+    # image corners are where its distortion is largest and where a calibration goes wrong when no
+    # board was seen there; a person calibrating deliberately holds the board into each corner.
+    corner_share: float = 1 / 3
 
 
 LEVELS: dict[str, Difficulty] = {
@@ -50,17 +54,17 @@ LEVELS: dict[str, Difficulty] = {
     "real": Difficulty(
         "real", contrast_k=(4.0, 10.0), heat_spread_mm=(1.0, 2.5), board_gradient=0.25,
         reflection_prob=0.3, reflection_strength=(0.1, 0.35), inverted_prob=0.25,
-        width_frac=(0.25, 0.6), max_tilt_deg=50.0, max_roll_deg=20.0, edge_prob=0.35, partial_prob=0.5,
+        width_frac=(0.25, 0.6), max_tilt_deg=50.0, max_roll_deg=20.0, edge_prob=0.5, partial_prob=0.5,
         min_square_px=7.0, clutter=2, occluder_prob=0.0,
         blur_px=(0.6, 0.9), vignette=0.08, housing_k=0.5, gain_nonuniformity=0.03, column_fpn_k=0.08,
-        noise_k=0.05),
+        noise_k=0.05, corner_share=0.5),
     "hard": Difficulty(
         "hard", contrast_k=(1.5, 5.0), heat_spread_mm=(2.0, 4.0), board_gradient=0.4,
         reflection_prob=0.6, reflection_strength=(0.2, 0.5), inverted_prob=0.5,
         width_frac=(0.2, 0.6), max_tilt_deg=65.0, max_roll_deg=25.0, edge_prob=0.5, partial_prob=0.5,
         min_square_px=6.0, clutter=5, occluder_prob=0.25,
         blur_px=(0.9, 1.4), vignette=0.15, housing_k=1.5, gain_nonuniformity=0.06, column_fpn_k=0.2,
-        noise_k=0.08),
+        noise_k=0.08, corner_share=0.5),
 }
 
 

@@ -64,7 +64,8 @@ def _target_pixel(rng: np.random.Generator, diff: Difficulty, W: int, H: int) ->
         lo, hi = (-0.05, 0.12) if partial else (0.12, 0.25)
         fx = rng.uniform(lo, hi)
         fy = rng.uniform(lo, hi)
-        kind = rng.integers(3)        # 0 corner, 1 left/right edge, 2 top/bottom edge
+        # 0 corner, 1 left/right edge, 2 top/bottom edge
+        kind = 0 if rng.random() < diff.corner_share else 1 + int(rng.integers(2))
         if kind == 1:
             fy = rng.uniform(0.2, 0.8)
         elif kind == 2:

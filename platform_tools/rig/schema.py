@@ -321,6 +321,20 @@ class Thermal8Bit:
     bilateral_d: Annotated[int, Gt(0)]
     bilateral_sigma_color: Annotated[float, Gt(0)]
     bilateral_sigma_space: Annotated[float, Gt(0)]
+    #: the percentile clip applies only to frames whose maximum is above this (FIReStereo's rule);
+    #: below it, plain min-max
+    clip_above_counts: Annotated[int, Ge(0), Le(65535)]
+
+
+@dataclass(frozen=True)
+class SyncLimits:
+    """Pass/fail limits of `platform_tools sync-check` (issue 9)."""
+    #: an interval above this times the nominal period is a drop
+    drop_interval_factor: Annotated[float, Gt(1)]
+    max_drop_percent: Annotated[float, Ge(0), Le(100)]
+    #: p99 of |pairing residual - constant offset| (thermal pair, and ZED left to each thermal)
+    max_pair_jitter_p99_ms: Annotated[float, Gt(0)]
+    max_drift_ppm: Annotated[float, Gt(0)]
 
 
 @dataclass(frozen=True)
@@ -329,6 +343,13 @@ class Processing:
     pair_rate_hz: Hz
     #: thermal frames dropped on each side of an FFC period
     ffc_margin_frames: Annotated[int, Ge(0)]
+    #: frames of the four cameras pair when their stamps agree within this, after the constant
+    #: offset between the cameras (measured per recording) is removed
+    pair_tolerance_ms: Annotated[float, Gt(0)]
+    #: registration z-buffer: a point splats onto a thermal pixel when its depth is within this of
+    #: the nearest point there (the same surface); farther points are occluded
+    zbuffer_tolerance_percent: Annotated[float, Gt(0), Lt(100)]
+    sync_limits: SyncLimits
 
 
 # ----------------------------------------------------------------------------- on-device stack (issue 8)

@@ -216,3 +216,48 @@ def test_detect_command_bad_inputs(calibrate, tmp_path, synth_set):
     assert "--board" in _one_line_error(calibrate("detect", "--images", str(empty), "--board", "ten",
                                                   "--out", str(out)))
     assert not out.exists()
+
+
+# ----------------------------------------------------------------------------- grid trim, growth
+def _lattice(ni, nj, step=12.0):
+    ij = np.array([(i, j) for j in range(nj) for i in range(ni)])
+    return 50.0 + step * ij.astype(float), ij
+
+
+def test_grid_one_line_too_large_is_trimmed_to_the_board():
+    """A 10x7 grid with two stray background corners linked on as an eighth row: trimmed to the
+    10x7 window holding the board, the strays marked -1, the board's labels unshifted."""
+    from calibration.detect.grid import orient
+    xy, ij = _lattice(10, 7)
+    xy = np.vstack([xy, [[50.0 + 12 * 3, 50.0 + 12 * 7], [50.0 + 12 * 4, 50.0 + 12 * 7]]])
+    ij = np.vstack([ij, [[3, 7], [4, 7]]])
+    out, why = orient(xy, ij, 10, 7)
+    assert why == ""
+    assert (out[-2:] == -1).all()
+    assert np.array_equal(out[:70], ij[:70])
+
+
+def test_grid_larger_than_the_board_everywhere_is_refused():
+    """A full 10x7 grid for a 9x6 board: every 9x6 window is as good, so no guess is made."""
+    from calibration.detect.grid import orient
+    xy, ij = _lattice(10, 7)
+    _, why = orient(xy, ij, 9, 6)
+    assert "larger than" in why
+
+
+def test_steep_and_hard_boards_are_completed_without_wrong_labels(synth_set):
+    """'hard' views (tilts up to 65 deg, heavy blur, low contrast, clutter): the grid growth finds
+    the corners the linking misses, and no corner is ever reported at another's board coordinates."""
+    folder = synth_set("hard", n=8, seed=3)
+    truth, corners = truth_of(folder)
+    steep_complete = 0
+    for im, q in zip(truth["images"], corners):
+        det = detect_corners(image(folder, im["file"]), (10, 7))
+        e = np.linalg.norm(det.corners - q, axis=1)
+        found = np.isfinite(e)
+        assert not np.any(e[found] > 3.0), (im["file"], np.nanmax(e))
+        assert not np.any(np.isfinite(det.corners[:, 0]) & np.isnan(q[:, 0]))
+        R = cv2.Rodrigues(np.array(im["rt_cam_board"][:3]))[0]
+        if np.degrees(np.arccos(abs(R[2, 2]))) > 40 and im["visible"] == 70 and not im["occluded"]:
+            steep_complete += det.complete
+    assert steep_complete >= 1

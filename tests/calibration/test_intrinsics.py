@@ -91,3 +91,38 @@ def test_kannala_brandt_matches_opencv():
     np.testing.assert_allclose(kb.project(v, p), q_cv[0], atol=1e-9)
     np.testing.assert_allclose(kb.unproject(kb.project(v, p), p), v / np.linalg.norm(v, axis=1, keepdims=True),
                                atol=1e-9)
+
+
+def test_default_meets_the_whole_image_target_on_covered_corners(truth):
+    """No regularisation bias: with boards over the whole image, OPENCV8 is right to the corners."""
+    s = simulate(*truth, SIZE, n=30, noise_px=0.05, seed=3, tilt_deg=35.0)
+    sol = mrcal_solver.solve(s.observations, lensmodel=None, focal_px=F)
+    c = compare_models(sol.cameramodel(), truth_model(truth))
+    assert c.rms_px < 0.1 and c.central_rms_px < 0.05, c.summary()
+    assert not sol.rejected_images
+
+
+def test_a_board_in_the_wrong_one_of_its_two_poses_is_put_right(truth, corners):
+    """The planar pose ambiguity: a board seeded tilted the wrong way is fixed, not rejected."""
+    from calibration.intrinsics.mrcal_solver import _fix_poses
+    import cv2
+    obs = corners.observations
+    oi = dict(lensmodel=truth[0], intrinsics=np.array([truth[1]]),
+              frames_rt_toref=np.array(corners.rt_cam_board, dtype=float))
+    good = oi["frames_rt_toref"][4].copy()
+    R = cv2.Rodrigues(good[:3])[0]
+    flip = cv2.Rodrigues(np.array([0.0, 0.5, 0.0]))[0]      # tilt the board 29 deg the other way
+    oi["frames_rt_toref"][4, :3] = cv2.Rodrigues(R @ flip)[0].ravel()
+    assert _fix_poses(obs, oi) == [4]
+    np.testing.assert_allclose(oi["frames_rt_toref"][4], good, atol=5e-3)
+
+
+def test_cross_validation_halves_are_disjoint_and_agree_on_good_data(truth, corners):
+    from calibration.intrinsics.crossval import cross_validate
+    sol = mrcal_solver.solve(corners.observations, lensmodel=None, focal_px=F)
+    cv = cross_validate(sol)
+    a, b = cv.halves
+    assert not set(a) & set(b) and len(a) + len(b) == sol.observations.n
+    assert cv.diff_px.shape == cv.grid.shape[:2]
+    assert np.sqrt(np.mean(cv.diff_px[8:-8, 8:-8] ** 2)) < 0.2
+    assert cross_validate(sol.__class__(**{**sol.__dict__, "observations": sol.observations.subset([0, 1, 2, 3, 4])})) is None

@@ -42,3 +42,54 @@ def test_centre_only_boards_solve_but_are_not_trusted():
     assert "not trustworthy" in page and page.count("<svg") >= 5
     assert not re.search(r'(src|href)\s*=\s*"(https?:)?//', page)     # nothing fetched
     assert out.summary["uncertainty"]["max_px"] > out.summary["uncertainty"]["central_max_px"]
+
+
+def _without_image_corners(obs, radius_px: float):
+    """The same observations with every corner within radius_px of an image corner removed."""
+    o = obs.subset(np.arange(obs.n))
+    w, h = o.imagersize
+    for cx, cy in ((0, 0), (w - 1, 0), (0, h - 1), (w - 1, h - 1)):
+        near = np.hypot(o.corners[..., 0] - cx, o.corners[..., 1] - cy) < radius_px
+        o.corners[near] = np.nan
+        o.weights[near] = 0.0
+    return o
+
+
+@pytest.fixture(scope="module")
+def covered():
+    lm, intr = fisheye_truth(408.3, SIZE)
+    return simulate(lm, intr, SIZE, n=40, noise_px=0.05, seed=11, tilt_deg=35.0)
+
+
+def test_cross_validation_rejects_uncovered_corners_and_accepts_a_covered_set(covered):
+    import mrcal
+    sol = mrcal_solver.solve(covered.observations, lensmodel=None, focal_px=408.3)
+    good = build(sol, camera_name="thermal", rig_hash="0" * 40, corners_vnl="# filename x y level\n")
+    assert good.verdict.trustworthy, good.verdict.headline
+    assert good.summary["validity"]["trusted_share"] > 0.99
+    assert good.summary["cross_validation"]["max_px"] < 0.5
+
+    holes = _without_image_corners(covered.observations, 150.0)
+    sol2 = mrcal_solver.solve(holes, lensmodel=None, focal_px=408.3)
+    bad = build(sol2, camera_name="thermal", rig_hash="0" * 40, corners_vnl="# filename x y level\n")
+    assert not bad.verdict.trustworthy
+    said = " ".join(bad.verdict.reasons)
+    for corner in ("top-left", "top-right", "bottom-left", "bottom-right"):
+        assert f"the {corner} corner has no data" in said, said
+    assert "halves" in said
+    # the valid-intrinsics region is in the .cameramodel: the middle is in it, the corners are not
+    import io
+    m = mrcal.cameramodel(io.StringIO(bad.files["thermal.cameramodel"]))
+    region = m.valid_intrinsics_region()
+    assert region is not None and len(region) >= 4
+    assert mrcal.is_within_valid_intrinsics_region(np.array([320.0, 256.0]), m)
+    assert not mrcal.is_within_valid_intrinsics_region(np.array([5.0, 5.0]), m)
+    assert 0.5 < bad.summary["validity"]["trusted_share"] < 0.99
+    page = bad.files["report.html"]
+    assert "cross-validation" in page.lower() and "valid-intrinsics region" in page
+
+
+def test_region_sentence_names_the_disagreement():
+    from calibration.report.validity import RegionTrust
+    s = RegionTrust("top-left corner", 0.3, 1.0, 3.14, float("nan")).sentence()
+    assert s == "the top-left corner has no data: the halves disagree by 3.1 px there"

@@ -65,6 +65,8 @@ def test_calibrate_validate_end_to_end_and_wrong_board(synth_set, tmp_path, caps
         assert (out / name).is_file(), name
     m = mrcal.cameramodel(str(out / "thermal.cameramodel"))
     assert m.optimization_inputs() is not None and m.intrinsics()[0] == "LENSMODEL_OPENCV8"
+    assert m.valid_intrinsics_region() is not None          # where cross-validation trusts it
+    assert summary["cross_validation"] is not None and 0 <= summary["validity"]["trusted_share"] <= 1
     assert yaml.safe_load((out / "thermal_camera_info.yaml").read_text())["distortion_model"] == "rational_polynomial"
     assert (out / "corners.vnl").read_text().startswith("# filename x y level")
     assert summary["n_images_used"] >= 10
