@@ -6,10 +6,10 @@ import argparse
 from typing import Sequence
 
 from .common import dispatch, tool_parser
-from . import boson_cmd, doctor_cmd, firmware_cmd, record_cmd, rig_cmd, simulate_cmd
+from . import boson_cmd, doctor_cmd, export_cmd, firmware_cmd, record_cmd, rig_cmd, simulate_cmd, synccheck_cmd
 
 #: subcommand modules, in the order --help lists them
-COMMANDS = [rig_cmd, boson_cmd, firmware_cmd, doctor_cmd, record_cmd, simulate_cmd]
+COMMANDS = [rig_cmd, boson_cmd, firmware_cmd, doctor_cmd, record_cmd, simulate_cmd, synccheck_cmd, export_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -321,7 +321,7 @@ class Thermal8Bit:
     bilateral_d: Annotated[int, Gt(0)]
     bilateral_sigma_color: Annotated[float, Gt(0)]
     bilateral_sigma_space: Annotated[float, Gt(0)]
-    #: the percentile clip applies only to frames whose maximum is above this (FIReStereo's rule);
+    #: the percentile clip applies only to frames whose maximum is at or above this (FIReStereo's rule);
     #: below it, plain min-max
     clip_above_counts: Annotated[int, Ge(0), Le(65535)]
 

@@ -3,6 +3,7 @@ injected timing faults and a truth file listing them.
 
 - ``msgs``      ROS 2 message definitions and dict builders
 - ``timeline``  when each camera captured and what went wrong (jitter, offsets, drops, FFC, clock step)
-- ``scenes``    the images: thermal from calibration.synth when present, a simple scene otherwise
+- ``geometry``  the images: a box scene of known geometry ray-cast with the rig's nominal cameras
+                (ZED colour and depth, thermal counts); the truth registration is tested against
 - ``writer``    write the recording (MCAP + rosbag2 metadata.yaml + truth.json)
 """

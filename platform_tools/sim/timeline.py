@@ -30,6 +30,8 @@ class SimParams:
     clock_step_ms: float = 250.0
     imu_hz: float = 200.0
     start_ns: int = 1_700_000_000 * NS
+    #: the thermal stamps run fast by this much against the ZED's (0: one clock; sync-check's drift)
+    thermal_drift_ppm: float = 0.0
 
 
 @dataclass
@@ -85,6 +87,8 @@ def build(rig: Rig, p: SimParams) -> Timeline:
                 dropped[cam].append(k)
                 continue
             t = p.start_ns + int(k * period_ns + offsets[cam] * 1e6 + rng.normal(0, jitter) * 1e6)
+            if cam.startswith("thermal"):
+                t += int(k * period_ns * p.thermal_drift_ppm * 1e-6)
             frozen = any(e["camera"] == cam and e["start_ns"] <= t < e["end_ns"] for e in ffc)
             frames.append(Frame(cam, k, host(t), frozen))
     imu = [host(p.start_ns + int(i * NS / p.imu_hz)) for i in range(int(p.duration_s * p.imu_hz))]

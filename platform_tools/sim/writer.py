@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import cv2
 import numpy as np
 import yaml
 from mcap_ros2.writer import Writer
@@ -12,7 +13,7 @@ from mcap_ros2.writer import Writer
 from .. import atomic
 from ..progress import progress
 from ..rig import Rig
-from . import msgs, scenes
+from . import geometry, msgs
 from .timeline import SimParams, Timeline, build, ffc_state
 
 LATENCY_NS = {"image": 6_000_000, "imu": 1_000_000, "status": 2_000_000}
@@ -56,28 +57,34 @@ def simulate(rig: Rig, out: Path, params: SimParams, scale: float = 0.25) -> dic
                 counts[topic] = counts.get(topic, 0) + 1
 
             events = _events(tl)
+            renderer = geometry.SceneRenderer(rig, sizes)
             for log_ns, kind, item in progress(events, desc="simulate-rig", unit="msg"):
                 if kind == "frame":
                     t_s = (item.index / tl.rate_hz)
                     side = item.camera.split("_")[1]
-                    shift = 0.0 if side == "left" else 0.15
                     frame_id = f"{item.camera}_optical" if item.camera.startswith("thermal") else \
                         f"{rig.desc.on_device.zed_camera_name}_{side}_camera_optical_frame"
                     if item.camera.startswith("thermal"):
                         if item.frozen and item.camera in last_thermal:
                             px = last_thermal[item.camera]
                         else:
-                            px = scenes.thermal(*sizes["thermal"], t_s, shift, rng)
+                            r, boxes = renderer.render(item.camera, t_s)
+                            raw = geometry.counts_from_c(geometry.temperature_c(r, boxes, renderer.scene))
+                            px = np.clip(raw + rng.normal(0, 8, raw.shape), 0, 65535).astype(np.uint16)
                             last_thermal[item.camera] = px
                         put(getattr(topics, item.camera), "sensor_msgs/Image",
                             msgs.image(item.stamp_ns, frame_id, px, "mono16"), log_ns)
                     else:
+                        r, boxes = renderer.render(item.camera, t_s)
+                        bgr = geometry.colour(r, boxes, renderer.scene)
+                        bgr = np.clip(bgr + rng.normal(0, 2, bgr.shape), 0, 255).astype(np.uint8)
+                        ok, jpg = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, 90])
                         put(getattr(topics, item.camera), "sensor_msgs/CompressedImage",
-                            msgs.compressed_image(item.stamp_ns, frame_id,
-                                                  scenes.zed_jpeg(*sizes["zed"], t_s, shift, rng)), log_ns)
+                            msgs.compressed_image(item.stamp_ns, frame_id, jpg.tobytes()), log_ns)
                         if side == "left":
                             put(topics.zed_depth, "sensor_msgs/Image",
-                                msgs.image(item.stamp_ns, frame_id, scenes.depth(*sizes["zed"]), "32FC1"), log_ns)
+                                msgs.image(item.stamp_ns, frame_id, geometry.zed_depth_m(r, renderer.scene),
+                                           "32FC1"), log_ns)
                 elif kind == "imu":
                     put(topics.zed_imu, "sensor_msgs/Imu",
                         msgs.imu(item, f"{rig.desc.on_device.zed_camera_name}_imu_link",
@@ -98,6 +105,10 @@ def simulate(rig: Rig, out: Path, params: SimParams, scale: float = 0.25) -> dic
             "topics_with_message_count": [{"topic_metadata": {"name": t, "serialization_format": "cdr"},
                                            "message_count": c} for t, c in counts.items()]}}, sort_keys=False))
         truth = tl.truth() | {"rig_hash": rig.hash, "topics": counts, "image_sizes": sizes, "scale": scale,
+                              "scene": renderer.scene,
+                              "cameras": {k: {"frame": c.name, "lensmodel": c.lensmodel,
+                                              "intrinsics": c.intrinsics.tolist(), "size": [c.width, c.height]}
+                                          for k, c in renderer.cams.items()},
                               "units": "times in ns since the epoch (true clock unless noted); offsets in ms "
                                        "after the trigger; dropped: trigger pulse numbers"}
         (stage / "truth.json").write_text(json.dumps(truth, indent=2) + "\n")

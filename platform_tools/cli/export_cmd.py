@@ -1,0 +1,83 @@
+"""`platform_tools export RECORDING... --out DIR`: recordings to a registered RGB-thermal dataset."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from .common import UserError, add_output_options, add_rig_options, print_json, rig_from_args
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("export", help="recordings to a dataset: paired, FFC-filtered, 8-bit thermal, registered RGB",
+                       description="Pair the four cameras (within processing.pair_tolerance_ms after their constant "
+                                   "offsets), drop thermal frames during FFC and processing.ffc_margin_frames on each "
+                                   "side, sample at --rate, convert thermal to 8-bit as the paper (min-max with "
+                                   "percentile clip, CLAHE, bilateral; processing.thermal_8bit) keeping the 16-bit "
+                                   "original, register the ZED left RGB into each thermal view from the recorded "
+                                   "depth (z-buffer, bilinear splatting, validity mask), and write PNGs with "
+                                   "index.csv / index.parquet. Run the same command again to resume an interrupted "
+                                   "export; a folder holding a different export is refused.")
+    p.add_argument("recordings", metavar="RECORDING", nargs="+", type=Path,
+                   help="rosbag2 folders, folders holding one (simulate-rig's DIR), or .mcap files")
+    p.add_argument("--out", metavar="DIR", required=True, type=Path, help="the dataset folder (created; resumed)")
+    p.add_argument("--rate", type=float, default=None, metavar="HZ",
+                   help="samples per second (default processing.pair_rate_hz)")
+    p.add_argument("--workers", type=int, default=1, metavar="N", help="worker processes (default 1)")
+    p.add_argument("--engine", choices=("pool", "dask"), default="pool",
+                   help="pool: a process pool on this machine (default); dask: dask.distributed, a local "
+                        "cluster of --workers processes or --scheduler's")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="with --engine dask: a running scheduler, e.g. tcp://10.0.0.1:8786 (workers must see "
+                        "the recordings and --out at the same paths)")
+    p.add_argument("--calibration", metavar="DIR", type=Path,
+                   help="folder of mrcal .cameramodel files as `calibrate nominal` names them (default: the rig's "
+                        "nominal models)")
+    p.add_argument("--tolerance-ms", type=float, default=None,
+                   help="pairing tolerance after the offsets (default processing.pair_tolerance_ms)")
+    p.add_argument("--ffc-margin", type=int, default=None, metavar="FRAMES",
+                   help="frames dropped on each side of an FFC (default processing.ffc_margin_frames)")
+    p.add_argument("--keep-ffc", action="store_true", help="keep FFC frames (flagged in the index)")
+    p.add_argument("--chunk-size", type=int, default=8, metavar="N", help="samples per unit of work (default 8)")
+    p.add_argument("--recover", action="store_true",
+                   help="salvage a truncated MCAP into NAME.recovered.mcap beside it (the original is kept)")
+    add_rig_options(p)
+    add_output_options(p)
+    p.set_defaults(handler=cmd_export)
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from ..dataset.export import ExportError, Params, export
+    if args.rate is not None and not 0 < args.rate <= 1000:
+        raise UserError(f"--rate {args.rate:g}: expected more than 0 and at most 1000 Hz")
+    if args.workers < 1:
+        raise UserError(f"--workers {args.workers}: expected 1 or more")
+    if args.chunk_size < 1:
+        raise UserError(f"--chunk-size {args.chunk_size}: expected 1 or more")
+    if args.tolerance_ms is not None and args.tolerance_ms <= 0:
+        raise UserError(f"--tolerance-ms {args.tolerance_ms:g}: expected more than 0")
+    if args.ffc_margin is not None and args.ffc_margin < 0:
+        raise UserError(f"--ffc-margin {args.ffc_margin}: expected 0 or more")
+    if args.scheduler and args.engine != "dask":
+        raise UserError("--scheduler needs --engine dask")
+    rig = rig_from_args(args)
+    params = Params.from_rig(rig, rate_hz=args.rate, tolerance_ms=args.tolerance_ms, ffc_margin=args.ffc_margin,
+                             keep_ffc=args.keep_ffc, chunk_size=args.chunk_size)
+    try:
+        summary = export(args.recordings, args.out, rig, params, calibration=args.calibration, engine=args.engine,
+                         workers=args.workers, scheduler=args.scheduler, recover=args.recover)
+    except ExportError as exc:
+        raise UserError(str(exc)) from None
+    except KeyboardInterrupt:
+        raise UserError(f"interrupted; the chunks already done are kept: run the same command again to resume "
+                        f"into {args.out}") from None
+    if args.json:
+        print_json(summary)
+    elif not args.quiet:
+        for r in summary["recordings"]:
+            c = r["counts"]
+            print(f"{r['name']}: {c['sampled']} samples from {c['zed_left_frames']} ZED frames "
+                  f"({c['complete']} complete pairs, {c['ffc_dropped']} dropped for FFC)")
+        how = "already complete, " if summary["chunks_run"] == 0 else "resumed, " if summary["resumed"] else ""
+        print(f"{summary['out']}: {summary['samples']} samples ({how}{summary['chunks_run']} of "
+              f"{summary['chunks']} chunks run); index.csv, index.parquet")
+    return 0

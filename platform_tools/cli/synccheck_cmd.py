@@ -1,0 +1,111 @@
+"""`platform_tools sync-check RECORDING`: can this recording's frames be trusted to pair?"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from .common import UserError, add_output_options, add_rig_options, print_json, rig_from_args
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("sync-check", help="sync analysis of a recording: drops, FFC, pairing residuals, verdict",
+                       description="Per stream: frame intervals, drops (interval above "
+                                   "processing.sync_limits.drop_interval_factor x the nominal period) and the "
+                                   "jitter; FFC periods; clock steps of the host; pairing residuals of the thermal "
+                                   "pair and of the ZED left with each thermal camera (mean, std, p99, max), their "
+                                   "constant offset and drift in ppm. Pass/fail against processing.sync_limits "
+                                   "(change them with --set processing.sync_limits.KEY=VALUE). Exit 1 on fail.")
+    p.add_argument("recording", metavar="RECORDING", type=Path,
+                   help="a rosbag2 folder, a folder holding one (simulate-rig's DIR), or an .mcap file")
+    p.add_argument("--plots", metavar="DIR", type=Path, help="write SVG plots (interval histograms, residuals "
+                                                             "over time with FFC marked) and report.json there")
+    p.add_argument("--recover", action="store_true",
+                   help="salvage a truncated MCAP into NAME.recovered.mcap beside it (the original is kept)")
+    add_rig_options(p)
+    add_output_options(p)
+    p.set_defaults(handler=cmd_sync_check)
+
+
+def _plots(report: dict, out: Path, rig) -> list[str]:
+    import json
+
+    from .. import atomic
+    from ..dataset import svgplot
+    period_ms = 1000.0 / rig.desc.sync.rate_hz
+    factor = report["limits"]["drop_interval_factor"]
+    times = report["_times"]
+    t0 = min(int(t[0]) for t in times.values() if len(t))
+    written = []
+    with atomic.OutputDir(out) as stage:
+        for name, t in times.items():
+            if name == "zed_depth":
+                continue
+            (stage / f"intervals_{name}.svg").write_text(
+                svgplot.interval_histogram(name, np.diff(np.sort(t)) / 1e6, period_ms, factor))
+            written.append(f"intervals_{name}.svg")
+        for name, (t, r) in report["_series"].items():
+            spans = []
+            for cam in ("thermal_left", "thermal_right"):
+                if cam in name:
+                    spans += [((e["start_ns"] - t0) / 1e9, (e["end_ns"] - t0) / 1e9, f"FFC {cam}")
+                              for e in report["ffc"][cam]]
+            (stage / f"residuals_{name}.svg").write_text(svgplot.residual_series(
+                name, (t - t0) / 1e9, r / 1e6, spans, report["pairs"][name]["offset_ms"]))
+            written.append(f"residuals_{name}.svg")
+        (stage / "report.json").write_text(json.dumps(_public(report), indent=2) + "\n")
+        written.append("report.json")
+    return [str(out / w) for w in written]
+
+
+def _public(report: dict) -> dict:
+    return {k: v for k, v in report.items() if not k.startswith("_")}
+
+
+def _fmt(v, spec=".2f") -> str:
+    return "-" if v is None else format(v, spec)
+
+
+def cmd_sync_check(args: argparse.Namespace) -> int:
+    from ..dataset.recording import RecordingError, open_recording
+    from ..dataset.sync import Limits, analyse
+    rig = rig_from_args(args)
+    try:
+        rec = open_recording(args.recording, rig, recover=args.recover)
+        report = analyse(rec, rig, Limits.from_rig(rig))
+    except RecordingError as exc:
+        raise UserError(str(exc)) from None
+    if args.plots:
+        report["plots"] = _plots(report, args.plots, rig)
+    if args.json:
+        print_json(_public(report))
+    elif not args.quiet:
+        print(f"{rec.path}: {report['verdict'].upper()}")
+        print(f"{'stream':<15} {'frames':>7} {'mean ms':>8} {'std ms':>7} {'max ms':>7} {'jitter':>7} "
+              f"{'drops':>6} {'missing':>8}")
+        for name, s in report["streams"].items():
+            iv = s["interval_ms"]
+            d = s.get("drops", {})
+            print(f"{name:<15} {s['frames']:>7} {_fmt(iv['mean']):>8} {_fmt(iv['std']):>7} {_fmt(iv['max']):>7} "
+                  f"{_fmt(s.get('jitter_ms'), '.3f'):>7} {d.get('events', '-'):>6} {d.get('missing_frames', '-'):>8}")
+        for st in report["clock_steps"]:
+            print(f"clock step: {st['step_ns'] / 1e6:+.3f} ms at stamp {st['at_ns']} (found on {st['found_on']})")
+        for cam, periods in report["ffc"].items():
+            for e in periods:
+                print(f"FFC {cam}: {(e['end_ns'] - e['start_ns']) / 1e9:.2f} s from stamp {e['start_ns']} "
+                      f"({e['source']})")
+        print(f"{'pair':<28} {'n':>5} {'mean':>7} {'std':>6} {'p99':>7} {'max':>7} {'offset':>7} {'jit99':>6} "
+              f"{'ppm':>7}")
+        for name, p in report["pairs"].items():
+            r = p["residual_ms"] or {}
+            print(f"{name:<28} {p['pairs']:>5} {_fmt(r.get('mean')):>7} {_fmt(r.get('std')):>6} "
+                  f"{_fmt(r.get('p99')):>7} {_fmt(r.get('max')):>7} {_fmt(p['offset_ms']):>7} "
+                  f"{_fmt(p['jitter_p99_ms']):>6} {_fmt(p['drift_ppm'], '.1f'):>7} "
+                  f"+- {_fmt(p.get('drift_stderr_ppm'), '.1f')}")
+        for c in report["checks"]:
+            if not c["ok"]:
+                print(f"FAIL {c['check']}: {c['value']} {c['unit']} (limit {c['limit']})")
+        for p in report.get("plots", []):
+            print(p)
+    return 0 if report["verdict"] == "pass" else 1

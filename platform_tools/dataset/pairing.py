@@ -1,0 +1,114 @@
+"""Which frames make the dataset: four-camera pairs, FFC frames out, sampled at a rate.
+
+- Times are header stamps with the host's clock steps taken out (sync.find_clock_steps).
+- Each camera's constant offset after the ZED left (trigger edge, transport) is measured on the
+  recording (median pairing residual) and removed; a ZED left frame pairs with the nearest frame of
+  each other camera (and the depth with the same stamp) when what remains is within the tolerance.
+- A thermal frame is an FFC frame when its camera's status says an FFC is in progress, or its pixels
+  repeat the previous frame's (frozen); it and ``ffc_margin`` frames on each side are dropped
+  (kept but flagged with ``keep_ffc``).
+- Sampling: slots every 1/rate seconds from the first ZED frame; per slot, the valid pair nearest
+  the slot's time.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .recording import Recording
+from .sync import corrected, ffc_periods, find_clock_steps, offsets_ns
+
+OTHERS = ("zed_right", "zed_depth", "thermal_left", "thermal_right")
+THERMAL = ("thermal_left", "thermal_right")
+
+
+@dataclass
+class Pair:
+    sample: int
+    frames: dict            # stream -> {"stamp_ns", "log_ns", "file"}
+    residual_ms: dict       # stream -> ms after the offset
+    ffc: dict               # thermal camera -> bool (in an FFC or within the margin)
+    ffc_status: dict        # thermal camera -> last status value (-1: no status topic)
+    since_ffc_s: dict       # thermal camera -> seconds since its last FFC ended (None: none yet)
+
+
+@dataclass
+class Plan:
+    pairs: list[Pair]
+    offsets_ms: dict
+    clock_steps: list
+    counts: dict = field(default_factory=dict)
+
+
+def _nearest(t_sorted: np.ndarray, x: np.ndarray) -> np.ndarray:
+    i = np.clip(np.searchsorted(t_sorted, x), 1, len(t_sorted) - 1)
+    left = t_sorted[i - 1]
+    return np.where(np.abs(x - left) <= np.abs(t_sorted[i] - x), i - 1, i)
+
+
+def plan(rec: Recording, rig, *, rate_hz: float, tolerance_ms: float, ffc_margin: int,
+         keep_ffc: bool = False) -> Plan:
+    rec.require("thermal_left", "thermal_right", why="the export pairs both thermal cameras with the ZED")
+    rec.require("zed_left", "zed_right", why="the export pairs the ZED left and right images")
+    rec.require("zed_depth", why="registration of RGB into the thermal views needs the ZED depth")
+    period = 1e9 / rig.desc.sync.rate_hz
+    steps = find_clock_steps(rec, period)
+    off = offsets_ns(rec, rig)
+    tc = {s: corrected(rec.streams[s].stamp_ns, steps) for s in ("zed_left",) + OTHERS}
+    order = {s: np.argsort(tc[s], kind="stable") for s in tc}
+    ref = tc["zed_left"]
+    match, ok = {}, np.ones(len(ref), bool)
+    resid = {}
+    for s in OTHERS:
+        ts = tc[s][order[s]]
+        j = _nearest(ts, ref + off[s])
+        r = ts[j] - (ref + off[s])
+        match[s] = order[s][j]
+        resid[s] = r / 1e6
+        ok &= np.abs(r) <= tolerance_ms * 1e6
+    # FFC frames, dilated by the margin (in frames of that camera)
+    ffc_flag, periods = {}, {}
+    for cam in THERMAL:
+        st = rec.streams[cam]
+        periods[cam] = ffc_periods(rec, cam, period)
+        flag = st.frozen.copy() if st.frozen is not None else np.zeros(len(st.stamp_ns), bool)
+        for e in periods[cam]:
+            flag |= (st.stamp_ns >= e["start_ns"]) & (st.stamp_ns < e["end_ns"])
+        by_time = flag[order[cam]]
+        if ffc_margin and by_time.any():
+            k = np.ones(2 * ffc_margin + 1)
+            by_time = np.convolve(by_time.astype(float), k, mode="same") > 0
+        dil = np.zeros_like(flag)
+        dil[order[cam]] = by_time
+        ffc_flag[cam] = dil
+    in_ffc = {cam: ffc_flag[cam][match[cam]] for cam in THERMAL}
+    valid = ok & (keep_ffc | ~(in_ffc["thermal_left"] | in_ffc["thermal_right"]))
+    # sampling
+    P = 1e9 / rate_hz
+    t0 = ref.min()
+    slot = np.round((ref - t0) / P).astype(np.int64)
+    dist = np.abs(ref - (t0 + slot * P))
+    chosen: dict[int, int] = {}
+    for i in np.nonzero(valid)[0]:
+        s = int(slot[i])
+        if s not in chosen or dist[i] < dist[chosen[s]]:
+            chosen[s] = int(i)
+    status = {cam: sorted(rec.status.get(cam) or []) for cam in THERMAL}
+    pairs = []
+    for s, i in sorted(chosen.items()):
+        frames = {"zed_left": i} | {c: int(match[c][i]) for c in OTHERS}
+        fr = {c: {"stamp_ns": int(rec.streams[c].stamp_ns[j]), "log_ns": int(rec.streams[c].log_ns[j]),
+                  "file": int(rec.streams[c].file_index[j])} for c, j in frames.items()}
+        fs, since = {}, {}
+        for cam in THERMAL:
+            t = fr[cam]["stamp_ns"]
+            prior = [v for (ts, v) in status[cam] if ts <= t]
+            fs[cam] = prior[-1] if prior else -1
+            ended = [e["end_ns"] for e in periods[cam] if e["end_ns"] <= t]
+            since[cam] = (t - max(ended)) / 1e9 if ended else None
+        pairs.append(Pair(s, fr, {c: float(resid[c][i]) for c in OTHERS},
+                          {cam: bool(in_ffc[cam][i]) for cam in THERMAL}, fs, since))
+    counts = {"zed_left_frames": int(len(ref)), "complete": int(ok.sum()),
+              "ffc_dropped": int((ok & ~valid).sum()), "sampled": len(pairs)}
+    return Plan(pairs, {k: v / 1e6 for k, v in off.items()}, steps, counts)

@@ -1,0 +1,203 @@
+"""Open a recording and index its streams by header stamp, without decoding images.
+
+A recording is given as a rosbag2 folder (``metadata.yaml`` + MCAP files), a folder holding one
+(``simulate-rig`` writes ``DIR/bag``), or MCAP files. The index holds, per rig stream, each message's
+header stamp (read straight from the CDR bytes: encapsulation header, then ``int32 sec``,
+``uint32 nanosec``), its log time (to find it again) and, for thermal images, whether its pixels
+repeat the previous frame's (a frozen frame: FFC). The thermal status topic is decoded (it is small).
+
+Bad input ends in :class:`RecordingError` with one line: a truncated MCAP (no index: the recorder
+was killed), a damaged one, a recording without a stream the caller needs.
+"""
+from __future__ import annotations
+
+import hashlib
+import logging
+import struct
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+log = logging.getLogger(__name__)
+
+#: rig streams by their short name -> attribute of rig.desc.on_device.topics
+STREAMS = ("zed_left", "zed_right", "zed_depth", "zed_imu", "thermal_left", "thermal_right")
+CAMERAS = ("zed_left", "zed_right", "thermal_left", "thermal_right")
+STATUS = ("thermal_left_status", "thermal_right_status")
+RECOVERED_SUFFIX = ".recovered.mcap"
+
+
+class RecordingError(Exception):
+    """A recording that cannot be used as given; ``str()`` is one line naming the file."""
+
+
+@dataclass
+class Stream:
+    name: str
+    topic: str
+    stamp_ns: np.ndarray             # int64, in recording order
+    log_ns: np.ndarray               # int64
+    file_index: np.ndarray           # int16: which MCAP file
+    frozen: np.ndarray | None = None  # thermal: same pixels as the previous frame
+
+
+@dataclass
+class Recording:
+    name: str
+    path: Path
+    files: list[Path]
+    streams: dict[str, Stream]
+    #: thermal camera -> list of (host stamp ns, ffc_status int) from the status topic
+    status: dict[str, list[tuple[int, int]]] = field(default_factory=dict)
+    recovered: list[str] = field(default_factory=list)
+
+    def has(self, name: str) -> bool:
+        return name in self.streams and len(self.streams[name].stamp_ns) > 0
+
+    def require(self, *names: str, why: str) -> None:
+        missing = [n for n in names if not self.has(n)]
+        if missing:
+            topics = ", ".join(sorted({self.streams[n].topic for n in missing if n in self.streams}
+                                      | {self._topics.get(n, n) for n in missing}))
+            raise RecordingError(f"{self.path}: no {' / '.join(missing)} messages ({topics}); {why}")
+
+    _topics: dict = field(default_factory=dict)
+
+    def identity(self) -> dict:
+        """What identifies the recording's content (for an export's fingerprint): files, sizes, counts."""
+        h = hashlib.sha256()
+        for f in self.files:
+            st = f.stat()
+            h.update(f"{f.name}:{st.st_size}".encode())
+        return {"name": self.name, "path": str(self.path),
+                "files": [f.name for f in self.files],
+                "messages": {n: int(len(s.stamp_ns)) for n, s in self.streams.items()},
+                "fingerprint": h.hexdigest()[:16]}
+
+
+def mcap_files(path: Path) -> tuple[str, list[Path]]:
+    """(recording name, its MCAP files in order) for a folder or a file."""
+    path = Path(path)
+    if not path.exists():
+        raise RecordingError(f"{path}: no such file or folder")
+    if path.is_file():
+        if path.suffix != ".mcap":
+            raise RecordingError(f"{path}: not an MCAP file (expected .mcap or a rosbag2 folder)")
+        return path.stem, [path]
+    meta = path / "metadata.yaml"
+    if meta.is_file():
+        try:
+            info = yaml.safe_load(meta.read_text())["rosbag2_bagfile_information"]
+            files = [path / p for p in info["relative_file_paths"]]
+        except (yaml.YAMLError, KeyError, TypeError) as exc:
+            raise RecordingError(f"{meta}: not a rosbag2 metadata file ({exc})") from None
+        name = path.parent.name if path.name == "bag" else path.name
+        missing = [f for f in files if not f.is_file()]
+        if missing:
+            raise RecordingError(f"{missing[0]}: listed in {meta.name} but missing")
+        return name, files
+    if (path / "bag").is_dir():
+        return path.name, mcap_files(path / "bag")[1]
+    files = sorted(p for p in path.glob("*.mcap") if not p.name.endswith(RECOVERED_SUFFIX))
+    if not files:
+        raise RecordingError(f"{path}: no MCAP files (expected a rosbag2 folder or .mcap files)")
+    return path.name, files
+
+
+def _is_truncated(path: Path) -> bool:
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+    try:
+        with open(path, "rb") as f:
+            return make_reader(f).get_summary() is None
+    except (McapError, EOFError, struct.error, ValueError):
+        return True
+
+
+def resolve_files(files: list[Path], recover: bool) -> tuple[list[Path], list[str]]:
+    """Replace each truncated MCAP by its recovered copy: an existing ``.recovered.mcap`` beside it,
+    or one written now with ``recover=True`` (the original is never modified)."""
+    out, notes = [], []
+    for f in files:
+        if not _is_truncated(f):
+            out.append(f)
+            continue
+        copy = f.with_name(f.name[:-len(".mcap")] + RECOVERED_SUFFIX)
+        if copy.is_file() and not _is_truncated(copy):
+            out.append(copy)
+            notes.append(f"{f.name}: truncated; using its recovered copy {copy.name}")
+            continue
+        if not recover:
+            raise RecordingError(
+                f"{f}: truncated MCAP (no index: the recorder was killed or lost power); run again with "
+                f"--recover to salvage its readable messages into {copy.name} (the original is kept)")
+        from ..device.mcapcheck import recover as mcap_recover
+        rec = mcap_recover(f)
+        out.append(Path(rec.path))
+        notes.append(f"{f.name}: truncated; recovered {rec.messages} messages into {copy.name}"
+                     + (f" (stopped at: {rec.stopped_at})" if rec.stopped_at else ""))
+    for n in notes:
+        log.warning(n)
+    return out, notes
+
+
+def header_stamp(data: bytes) -> int:
+    """Header stamp (ns) of a CDR-serialised ROS 2 message that starts with std_msgs/Header."""
+    endian = "<" if data[1] == 1 else ">"
+    sec, nsec = struct.unpack_from(endian + "iI", data, 4)
+    return sec * 1_000_000_000 + nsec
+
+
+def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS) -> Recording:
+    """Index a recording's rig streams (and the thermal FFC status)."""
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    name, files = mcap_files(path)
+    files, notes = resolve_files(files, recover)
+    topics = rig.desc.on_device.topics
+    by_topic = {getattr(topics, s): s for s in streams}
+    status_topics = {getattr(topics, s): s.removesuffix("_status") for s in STATUS}
+    cols: dict[str, list] = {s: [] for s in streams}
+    tails: dict[str, bytes] = {}
+    status: dict[str, list[tuple[int, int]]] = {c: [] for c in status_topics.values()}
+    decoder = DecoderFactory()
+    decoders: dict[int, object] = {}
+    for fi, f in enumerate(files):
+        try:
+            with open(f, "rb") as fh:
+                reader = make_reader(fh)
+                for schema, channel, msg in reader.iter_messages(
+                        topics=list(by_topic) + list(status_topics), log_time_order=True):
+                    s = by_topic.get(channel.topic)
+                    if s is not None:
+                        frozen = False
+                        if s.startswith("thermal"):
+                            tail = bytes(msg.data[-4096:])
+                            frozen = tails.get(s) == tail
+                            tails[s] = tail
+                        cols[s].append((header_stamp(msg.data), msg.log_time, fi, frozen))
+                    else:
+                        dec = decoders.get(schema.id)
+                        if dec is None:
+                            dec = decoders[schema.id] = decoder.decoder_for("cdr", schema)
+                        m = dec(msg.data)
+                        stamp = m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
+                        for st in m.status:
+                            values = {kv.key: kv.value for kv in st.values}
+                            if "ffc_status" in values:
+                                status[status_topics[channel.topic]].append((stamp, int(values["ffc_status"])))
+        except (McapError, EOFError, struct.error, ValueError) as exc:
+            raise RecordingError(f"{f}: damaged MCAP ({type(exc).__name__}: {exc}); "
+                                 f"run again with --recover to salvage what is readable") from None
+    out = {}
+    for s, rows in cols.items():
+        a = np.array(rows, dtype=np.int64).reshape(-1, 4)
+        out[s] = Stream(s, getattr(topics, s), a[:, 0], a[:, 1], a[:, 2].astype(np.int16),
+                        a[:, 3].astype(bool) if s.startswith("thermal") else None)
+    rec = Recording(name, Path(path), files, out, status, notes)
+    rec._topics = {s: getattr(topics, s) for s in streams}
+    return rec

@@ -1,0 +1,239 @@
+"""Sync analysis of a recording: can its frames be trusted to pair?
+
+All times are the header stamps the drivers wrote (host clock). In order:
+
+1. Clock steps: the host clock jumping (NTP, a manual set) shows as one gap, or a negative interval,
+   at the same instant in every stream. Found on the IMU (200 Hz, densest) when it is recorded,
+   else where every camera has a gap within one frame period of the others. Stamps after a step are
+   corrected by it before anything else is computed.
+2. Per stream: intervals (mean, std, min, max), drops (an interval above ``drop_interval_factor`` x
+   the nominal period; missing frames = round(interval / period) - 1), and the per-frame jitter
+   (std of the intervals that are one period, / sqrt 2: each interval is the difference of two stamps).
+3. FFC periods per thermal camera: from the status topic (ffc_status 2 = in progress), else from
+   frozen frames (pixels identical to the previous frame).
+4. Pairing residuals for the thermal pair and ZED left to each thermal camera: each frame of the
+   second stream against the nearest frame of the first (within half a period); mean, std, p99, max;
+   a line fit over time gives the constant offset and the drift in ppm (with its standard error);
+   the verdict judges the jitter about that line (p99 of |residual - fit|) and the drift, beyond
+   three standard errors (a short recording's jitter alone makes a slope of tens of ppm).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .recording import CAMERAS, Recording
+
+NS = 1_000_000_000
+PAIRS = (("thermal_left", "thermal_right"), ("zed_left", "thermal_left"), ("zed_left", "thermal_right"))
+
+
+@dataclass(frozen=True)
+class Limits:
+    drop_interval_factor: float
+    max_drop_percent: float
+    max_pair_jitter_p99_ms: float
+    max_drift_ppm: float
+
+    @classmethod
+    def from_rig(cls, rig, **overrides) -> "Limits":
+        lim = rig.desc.processing.sync_limits
+        values = dict(drop_interval_factor=lim.drop_interval_factor, max_drop_percent=lim.max_drop_percent,
+                      max_pair_jitter_p99_ms=lim.max_pair_jitter_p99_ms, max_drift_ppm=lim.max_drift_ppm)
+        values.update({k: v for k, v in overrides.items() if v is not None})
+        return cls(**values)
+
+
+def _stats_ms(x_ns: np.ndarray) -> dict:
+    if len(x_ns) == 0:
+        return {"mean": None, "std": None, "min": None, "max": None}
+    x = x_ns / 1e6
+    return {"mean": float(np.mean(x)), "std": float(np.std(x)), "min": float(np.min(x)), "max": float(np.max(x))}
+
+
+def find_clock_steps(rec: Recording, period_ns: float) -> list[dict]:
+    """Steps of the host clock: [{at_ns (first stamp after, as recorded), step_ns}]."""
+    if rec.has("zed_imu") and len(rec.streams["zed_imu"].stamp_ns) > 10:
+        t = rec.streams["zed_imu"].stamp_ns
+        d = np.diff(t)
+        med = float(np.median(d))
+        idx = np.nonzero((d > 10 * med) | (d < 0))[0]
+        return [{"at_ns": int(t[i + 1]), "step_ns": int(d[i] - med), "found_on": "zed_imu"} for i in idx]
+    # no IMU: a gap in every camera at the same instant
+    cams = [c for c in CAMERAS if rec.has(c)]
+    if len(cams) < 2:
+        return []
+    gaps = {}
+    for c in cams:
+        t = rec.streams[c].stamp_ns
+        d = np.diff(t)
+        big = np.nonzero((d > 3 * period_ns) | (d < 0))[0]
+        gaps[c] = [(int(t[i + 1]), int(d[i])) for i in big]
+    steps = []
+    for at, d in gaps[cams[0]]:
+        matched = [min(gaps[c], key=lambda g: abs(g[0] - at), default=None) for c in cams[1:]]
+        if all(m is not None and abs(m[0] - at) < 1.5 * period_ns for m in matched):
+            # the smallest gap excess over one period among the cameras is the step (the others add drops)
+            excess = [d - period_ns] + [m[1] - period_ns for m in matched]
+            steps.append({"at_ns": at, "step_ns": int(min(excess, key=abs)), "found_on": "cameras"})
+    return steps
+
+
+def corrected(stamps: np.ndarray, steps: list[dict]) -> np.ndarray:
+    """Stamps with the clock steps taken out (each step subtracted from the stamps after it)."""
+    out = stamps.astype(np.int64).copy()
+    for s in steps:
+        # the step happened between two messages of every stream; recorded stamps after it are >= at_ns
+        # when the step is forward; a backward step is found by the order of the recording instead
+        if s["step_ns"] >= 0:
+            out[stamps >= s["at_ns"]] -= s["step_ns"]
+        else:
+            d = np.diff(stamps)
+            neg = np.nonzero(d < 0)[0]
+            if len(neg):
+                out[neg[0] + 1:] -= s["step_ns"]
+    return out
+
+
+def stream_report(t: np.ndarray, period_ns: float, factor: float) -> dict:
+    d = np.diff(np.sort(t))
+    drop = d > factor * period_ns
+    missing = np.maximum(np.round(d[drop] / period_ns).astype(int) - 1, 0)
+    one = d[np.abs(d - period_ns) < 0.5 * period_ns]
+    expected = len(t) + int(missing.sum())
+    return {"frames": int(len(t)), "interval_ms": _stats_ms(d),
+            "jitter_ms": float(np.std(one) / np.sqrt(2) / 1e6) if len(one) > 2 else None,
+            "drops": {"events": int(drop.sum()), "missing_frames": int(missing.sum()),
+                      "percent": 100.0 * int(missing.sum()) / max(expected, 1),
+                      "at_ns": [int(x) for x in np.sort(t)[1:][drop]]}}
+
+
+def ffc_periods(rec: Recording, camera: str, period_ns: float) -> list[dict]:
+    """FFC periods of a thermal camera (host stamps): from its status topic, else from frozen frames."""
+    status = rec.status.get(camera) or []
+    out = []
+    if status:
+        start = None
+        for stamp, state in sorted(status):
+            if state == 2 and start is None:
+                start = stamp
+            elif state != 2 and start is not None:
+                out.append({"start_ns": start, "end_ns": stamp, "source": "status"})
+                start = None
+        if start is not None:
+            out.append({"start_ns": start, "end_ns": int(rec.streams[camera].stamp_ns.max()), "source": "status"})
+        return out
+    s = rec.streams.get(camera)
+    if s is None or s.frozen is None:
+        return out
+    t, fr = s.stamp_ns, s.frozen
+    i = 0
+    while i < len(t):
+        if fr[i]:
+            j = i
+            while j + 1 < len(t) and fr[j + 1]:
+                j += 1
+            if j - i + 1 >= 3:   # a few identical frames in a row: noise never repeats exactly
+                out.append({"start_ns": int(t[i - 1] if i else t[i]), "end_ns": int(t[j] + period_ns),
+                            "source": "frozen frames"})
+            i = j + 1
+        else:
+            i += 1
+    return out
+
+
+def pair_residuals(ta: np.ndarray, tb: np.ndarray, period_ns: float) -> tuple[np.ndarray, np.ndarray]:
+    """(time, residual tb - nearest ta) for every b frame with an a frame within half a period."""
+    ta = np.sort(ta)
+    tb = np.sort(tb)
+    if len(ta) == 0 or len(tb) == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    i = np.clip(np.searchsorted(ta, tb), 1, len(ta) - 1) if len(ta) > 1 else np.zeros(len(tb), int)
+    cand = np.stack([ta[np.maximum(i - 1, 0)], ta[i]])
+    best = cand[np.argmin(np.abs(cand - tb), axis=0), np.arange(len(tb))]
+    r = tb - best
+    # pairing is by trigger: the residual's typical value (a constant offset) may be up to half a period
+    ok = np.abs(r) < period_ns / 2
+    return tb[ok], r[ok]
+
+
+def pair_report(t: np.ndarray, r_ns: np.ndarray) -> dict:
+    if len(r_ns) < 3:
+        return {"pairs": int(len(r_ns)), "residual_ms": None, "offset_ms": None, "drift_ppm": None,
+                "jitter_p99_ms": None}
+    r = r_ns / 1e6
+    x = (t - t[0]) / NS
+    slope, intercept = np.polyfit(x, r, 1)            # ms per s -> ppm: x 1000
+    fit = intercept + slope * x
+    se = np.sqrt(np.sum((r - fit) ** 2) / max(len(r) - 2, 1) / max(np.sum((x - x.mean()) ** 2), 1e-12))
+    return {"pairs": int(len(r)),
+            "residual_ms": {"mean": float(np.mean(r)), "std": float(np.std(r)),
+                            "p99": float(np.percentile(np.abs(r), 99)), "max": float(np.max(np.abs(r)))},
+            "offset_ms": float(np.median(r)), "drift_ppm": float(slope * 1000.0),
+            "drift_stderr_ppm": float(se * 1000.0),
+            "jitter_p99_ms": float(np.percentile(np.abs(r - fit), 99))}
+
+
+def analyse(rec: Recording, rig, limits: Limits) -> dict:
+    rate = rig.desc.sync.rate_hz
+    period = 1e9 / rate
+    rec.require("thermal_left", "thermal_right", why="sync-check needs both thermal streams")
+    steps = find_clock_steps(rec, period)
+    streams, times = {}, {}
+    for name in CAMERAS + ("zed_depth",):
+        if not rec.has(name):
+            continue
+        t = corrected(rec.streams[name].stamp_ns, steps)
+        times[name] = t
+        streams[name] = {"topic": rec.streams[name].topic} | stream_report(t, period, limits.drop_interval_factor)
+    if rec.has("zed_imu"):
+        t = corrected(rec.streams["zed_imu"].stamp_ns, steps)
+        d = np.diff(t)
+        streams["zed_imu"] = {"topic": rec.streams["zed_imu"].topic, "frames": int(len(t)),
+                              "interval_ms": _stats_ms(d)}
+    ffc = {c: ffc_periods(rec, c, period) for c in ("thermal_left", "thermal_right")}
+    pairs, series = {}, {}
+    for a, b in PAIRS:
+        if a in times and b in times:
+            t, r = pair_residuals(times[a], times[b], period)
+            pairs[f"{a}-{b}"] = pair_report(t, r)
+            series[f"{a}-{b}"] = (t, r)
+    checks = []
+    for name, s in streams.items():
+        if "drops" in s:
+            checks.append({"check": f"{name} drops", "value": round(s["drops"]["percent"], 3),
+                           "limit": limits.max_drop_percent, "unit": "%",
+                           "ok": s["drops"]["percent"] <= limits.max_drop_percent})
+    for name, p in pairs.items():
+        if p["jitter_p99_ms"] is None:
+            checks.append({"check": f"{name} pairs", "value": p["pairs"], "limit": 3, "unit": "pairs", "ok": False})
+            continue
+        checks.append({"check": f"{name} jitter p99", "value": round(p["jitter_p99_ms"], 3),
+                       "limit": limits.max_pair_jitter_p99_ms, "unit": "ms",
+                       "ok": p["jitter_p99_ms"] <= limits.max_pair_jitter_p99_ms})
+        # a drift fails when it is beyond the limit by more than its noise (3 standard errors): on a
+        # short recording the jitter alone makes a slope of tens of ppm
+        checks.append({"check": f"{name} drift", "value": round(p["drift_ppm"], 2),
+                       "limit": limits.max_drift_ppm, "unit": "ppm",
+                       "ok": abs(p["drift_ppm"]) - 3 * p["drift_stderr_ppm"] <= limits.max_drift_ppm})
+    report = {"recording": str(rec.path), "files": [str(f) for f in rec.files], "recovered": rec.recovered,
+              "nominal_rate_hz": rate, "clock_steps": steps, "streams": streams, "ffc": ffc, "pairs": pairs,
+              "limits": limits.__dict__, "checks": checks,
+              "verdict": "pass" if all(c["ok"] for c in checks) else "fail"}
+    report["_series"] = series   # for the plots; removed before printing
+    report["_times"] = times
+    return report
+
+
+def offsets_ns(rec: Recording, rig) -> dict[str, float]:
+    """Constant offset of each camera after the ZED left (median pairing residual), for the export."""
+    period = 1e9 / rig.desc.sync.rate_hz
+    steps = find_clock_steps(rec, period)
+    ref = corrected(rec.streams["zed_left"].stamp_ns, steps)
+    out = {"zed_left": 0.0}
+    for c in ("zed_right", "thermal_left", "thermal_right", "zed_depth"):
+        if rec.has(c):
+            _, r = pair_residuals(ref, corrected(rec.streams[c].stamp_ns, steps), period)
+            out[c] = float(np.median(r)) if len(r) else 0.0
+    return out

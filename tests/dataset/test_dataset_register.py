@@ -1,0 +1,150 @@
+"""Registration against truth: the simulated rig's box scene, rendered by ray casting with the rig's
+nominal cameras (platform_tools.sim.geometry), registered with the export's own calibration path.
+
+- every ZED pixel lands within 0.5 px of where its true 3D point projects in the thermal image;
+- the registered image is where it should be: the registered 3D point of each valid thermal pixel
+  projects within 0.5 px of that pixel;
+- occluded points never overwrite nearer ones: the registered depth is never behind the surface
+  the thermal camera truly sees;
+- nothing is splatted from pixels without depth;
+- numba and the plain numpy (np.add.at) version agree; the numba lens models agree with mrcal.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+mrcal = pytest.importorskip("mrcal")
+
+from platform_tools.dataset.calib import load_calibration  # noqa: E402
+from platform_tools.dataset.register import Registrar, register_numpy  # noqa: E402
+from platform_tools.sim import geometry  # noqa: E402
+
+TOL = 2.0                    # zbuffer tolerance, percent (the rig's default)
+
+
+@pytest.fixture(scope="module")
+def scene(rig):
+    # the sizes the rig records: the ZED at HD1200 / zed_pub_downscale_factor (its depth too), the
+    # Bosons at 640x512
+    zspec = rig.camera_model(rig.desc.sensors.zed_x.camera_model)
+    tspec = rig.camera_model(rig.desc.sensors.thermal.camera_model)
+    down = rig.desc.on_device.zed_pub_downscale_factor
+    ZED_SIZE = (int(zspec.width_px / down), int(zspec.height_px / down))
+    THERMAL_SIZE = (tspec.width_px, tspec.height_px)
+    boxes = geometry.boxes_at(geometry.SCENE, 0.7)
+    zed = geometry.sim_camera(rig, "zed_x_left_optical", *ZED_SIZE)
+    th = geometry.sim_camera(rig, "thermal_left_optical", *THERMAL_SIZE)
+    zr = geometry.cast(zed, zed.rays_rig(), boxes)
+    tr = geometry.cast(th, th.rays_rig(), boxes)
+    depth = geometry.zed_depth_m(zr, geometry.SCENE)
+    cal = load_calibration(rig)
+    reg = Registrar(cal.cams["zed_x_left_optical"].scaled(*ZED_SIZE, "test"),
+                    cal.cams["thermal_left_optical"].scaled(*THERMAL_SIZE, "test"),
+                    cal.rt_a_b("thermal_left_optical", "zed_x_left_optical"), TOL, min_coverage=0.5)
+    return dict(boxes=boxes, zed=zed, th=th, zr=zr, tr=tr, depth=depth, reg=reg)
+
+
+def test_scene_has_occlusions_and_missing_depth(scene):
+    d = scene["depth"]
+    assert np.isnan(d).mean() > 0.2                            # sky: no depth
+    assert len(np.unique(scene["zr"].which)) == 5             # four boxes and the sky
+
+
+def test_every_point_lands_within_half_a_pixel_of_its_truth(scene):
+    us, vs, zs = scene["reg"].points(scene["depth"])
+    pts = scene["zr"].points_mm.reshape(-1, 3)
+    q_true, z_true = scene["th"].project_rig(pts)
+    landed = ~np.isnan(us)
+    assert landed.sum() > 0.4 * landed.size
+    err = np.hypot(us[landed] - q_true[landed, 0], vs[landed] - q_true[landed, 1])
+    assert err.max() < 0.5, err.max()
+    assert np.allclose(zs[landed], z_true[landed] / 1000.0, rtol=1e-5)
+
+
+def test_registered_image_lands_where_it_should(scene):
+    """Register the true 3D points as the 'colour': each valid thermal pixel's registered point must
+    project back onto that pixel (within 0.5 px) and lie on the surface the thermal camera sees."""
+    reg, th = scene["reg"], scene["th"]
+    res = reg.register(scene["depth"], scene["zr"].points_mm.astype(np.float64))
+    assert res.mask.mean() > 0.4
+    q, _ = th.project_rig(res.image.astype(np.float64)[res.mask])
+    vv, uu = np.nonzero(res.mask)
+    err = np.hypot(q[:, 0] - uu, q[:, 1] - vv)
+    assert np.percentile(err, 99.5) < 0.5 and np.median(err) < 0.1, (np.median(err), np.percentile(err, 99.5))
+    # everywhere the z-buffer's premise holds, all within 0.5 px: the pixel and its 8 neighbours valid,
+    # on one box, and the true depth changing by less than the z-buffer tolerance across them (a
+    # surface seen at a grazing angle changes faster: the near side of each pixel wins there, the
+    # documented limit of a depth-relative z-buffer)
+    z = np.nan_to_num(scene["tr"].z_m, nan=np.inf)
+    which = scene["tr"].which
+    interior = res.mask.copy()
+    zmin, zmax = z.copy(), z.copy()
+    for dv in (-1, 0, 1):
+        for du in (-1, 0, 1):
+            shifted = lambda a: np.roll(np.roll(a, dv, 0), du, 1)  # noqa: E731
+            interior &= shifted(res.mask) & (shifted(which) == which)
+            zmin, zmax = np.minimum(zmin, shifted(z)), np.maximum(zmax, shifted(z))
+    with np.errstate(invalid="ignore"):                   # sky: inf - inf
+        interior &= (zmax - zmin) <= zmin * TOL / 100
+    assert interior.sum() > 0.8 * res.mask.sum()
+    assert err[interior[res.mask]].max() < 0.5
+
+
+def test_occluded_points_never_overwrite_nearer_ones(scene):
+    res = scene["reg"].register(scene["depth"], np.zeros(scene["depth"].shape, np.float32))
+    truth = scene["tr"].z_m
+    valid = res.mask & np.isfinite(truth)
+    # never behind the surface the thermal camera sees (beyond the z-buffer tolerance)
+    assert np.all(res.depth_m[valid] <= truth[valid] * (1 + TOL / 100) + 1e-6)
+    # and on it nearly everywhere (in front of it only along silhouettes, by the splat's pixel)
+    on = np.abs(res.depth_m[valid] - truth[valid]) <= truth[valid] * TOL / 100
+    assert on.mean() > 0.97
+    # the near box hides part of the wall and the walker from the thermal camera but not all of
+    # it from the ZED: those ZED points land on near-box pixels and must lose there
+    near = scene["boxes"].index(next(b for b in scene["boxes"] if b.name == "near"))
+    on_near = valid & (scene["tr"].which == near)
+    assert on_near.sum() > 20
+    assert np.all(res.depth_m[on_near] < 1.5)
+
+
+def test_no_splatting_without_depth(scene):
+    reg, depth = scene["reg"], scene["depth"].copy()
+    region = np.zeros(depth.shape, bool)
+    region[200:400, 300:660] = True                      # a hole in the depth over boxes and wall
+    share = reg.register(depth, region.astype(np.float64))
+    depth[region] = np.nan
+    res = reg.register(depth, np.ones(depth.shape, np.float32))
+    only_from_hole = share.mask & (share.image[..., 0] > 0.999)
+    assert only_from_hole.sum() > 50
+    assert not res.mask[only_from_hole].any()
+    assert not reg.register(np.full(depth.shape, np.nan, np.float32), depth).mask.any()
+    assert not reg.register(np.zeros(depth.shape, np.float32), depth).mask.any()
+
+
+def test_numba_and_numpy_agree(scene):
+    rgb = (np.random.default_rng(1).random((*scene["depth"].shape, 3)) * 255).astype(np.uint8)
+    a = scene["reg"].register(scene["depth"], rgb)
+    b = register_numpy(scene["reg"], scene["depth"], rgb)
+    assert np.array_equal(a.mask, b.mask)
+    np.testing.assert_allclose(a.image, b.image, atol=1e-3)
+    np.testing.assert_allclose(np.nan_to_num(a.depth_m), np.nan_to_num(b.depth_m), atol=1e-5)
+
+
+@pytest.mark.parametrize("lensmodel, extra", [
+    ("LENSMODEL_PINHOLE", []), ("LENSMODEL_STEREOGRAPHIC", []),
+    ("LENSMODEL_OPENCV8", [-0.3, 0.1, 1e-3, -5e-4, -0.02, 0.01, 0.02, -0.01]),
+    ("LENSMODEL_OPENCV4", [-0.2, 0.05, 2e-3, 1e-3]),
+    ("LENSMODEL_OPENCV12", [-0.2, 0.05, 1e-3, 1e-3, 0, 0, 0, 0, 1e-3, 0, 1e-3, 0])])   # via mrcal.project
+def test_thermal_lens_models_project_as_mrcal(scene, lensmodel, extra):
+    from platform_tools.dataset.calib import CameraCal
+    th = scene["reg"].thermal
+    cam = CameraCal(th.name, lensmodel, np.concatenate([th.intrinsics[:4], extra]), th.imagersize, th.rt_cam_ref)
+    reg = Registrar(scene["reg"].zed, cam, np.concatenate([mrcal.r_from_R(scene["reg"].R), scene["reg"].t]), TOL)
+    us, vs, zs = reg.points(scene["depth"])
+    ok = ~np.isnan(us)
+    d = scene["depth"].ravel()[ok]
+    p = np.concatenate([reg.rays.reshape(-1, 2)[ok] * d[:, None], d[:, None]], 1) @ reg.R.T + reg.t
+    q = mrcal.project(p, lensmodel, cam.intrinsics)
+    assert ok.sum() > 1000
+    np.testing.assert_allclose(np.stack([us[ok], vs[ok]], 1), q, atol=1e-6)
