@@ -17,6 +17,7 @@ from platform_tools import atomic
 from platform_tools.cli.common import (CheckFailed, UserError, add_output_options, add_rig_options, print_json,
                                        rig_from_args)
 
+from .quiet import quiet_stderr
 from .synth_cmd import parse_board
 
 log = logging.getLogger("calibration.thermal")
@@ -131,8 +132,9 @@ def cmd_thermal(args: argparse.Namespace) -> int:
     if obs.imagersize != (spec.width_px, spec.height_px):
         log.warning("images are %dx%d, the rig description's thermal camera is %dx%d",
                     *obs.imagersize, spec.width_px, spec.height_px)
-    solution = solve(obs, solver=args.solver, lens_model=args.lens_model, focal_px=focal)
-    out = outputs.build(solution, camera_name=args.camera_name, rig_hash=rig.hash, corners_vnl=corners_text)
+    with quiet_stderr(enabled=not args.verbose):
+        solution = solve(obs, solver=args.solver, lens_model=args.lens_model, focal_px=focal)
+        out = outputs.build(solution, camera_name=args.camera_name, rig_hash=rig.hash, corners_vnl=corners_text)
     with atomic.OutputDir(args.out) as stage:
         for name, text in out.files.items():
             (stage / name).write_text(text)

@@ -19,8 +19,9 @@ REPO = Path(__file__).resolve().parents[1]
 @dataclass(frozen=True)
 class Step:
     title: str
-    argv: tuple[str, ...]   # "{out}" is replaced by the step's output folder
+    argv: tuple[str, ...]   # "{out}": the step's output folder; "{build}": the demo's whole output folder
     out: str                # sub-folder of the demo's output folder
+    show_output: bool = False  # print what the command prints (a result worth reading in the demo)
 
 
 def _tool(name: str) -> tuple[str, ...]:
@@ -47,7 +48,7 @@ STEPS: list[Step] = [
     Step("a simulated 5 s recording (MCAP, ROS 2 messages) with its injected faults in truth.json",
          _tool("platform_tools") + ("simulate-rig", "--out", "{out}", "--duration", "5"), "sim"),
     Step("that recording as a dataset: FFC-filtered 1 Hz pairs, 8-bit thermal, RGB registered into each thermal view",
-         _tool("platform_tools") + ("export", "{out}", "--out", "{out}/dataset", "--workers", "2"), "sim"),
+         _tool("platform_tools") + ("export", "{build}/sim", "--out", "{out}", "--workers", "2"), "sim/dataset"),
     Step("two emulated Bosons put in external-sync slave mode (read, diff, apply, verify, trigger check)",
          _tool("platform_tools") + ("boson-emulator", "--serial", "93588", "--serial", "93589", "--trigger",
                                     "--session-out", "{out}", "--run", "boson-config", "--slave",
@@ -55,15 +56,16 @@ STEPS: list[Step] = [
                                     "--set", "sensors.thermal.right.serial=93589", "--json"), "boson"),
     Step("CAD extrinsics of every camera and the IMU (extrinsics.yaml, Kalibr camchain, URDF, ROS 2 launch, mrcal)",
          _tool("calibrate") + ("extrinsics", "--from-cad", "--out", "{out}"), "calibration/extrinsics"),
-    Step("synthetic thermal checkerboard images with ground truth (a small 'real' set)",
-         _tool("calibrate") + ("synth", "--out", "{out}", "--n", "8", "--difficulty", "real", "--seed", "1"),
+    Step("synthetic thermal checkerboard images with ground truth (40 images, 'real' difficulty)",
+         _tool("calibrate") + ("synth", "--out", "{out}", "--n", "40", "--difficulty", "real", "--seed", "1"),
          "calibration/synth"),
     Step("thermal intrinsics of that synthetic set (mrcal OPENCV8; all formats, report.html with its verdict)",
-         _tool("calibrate") + ("thermal", "--images", "{out}/synth", "--board", "10x7", "--square", "0.04",
-                               "--out", "{out}/thermal", "--exit-zero"), "calibration"),
+         _tool("calibrate") + ("thermal", "--images", "{build}/calibration/synth", "--board", "10x7",
+                               "--square", "0.04", "--out", "{out}", "--exit-zero"), "calibration/thermal"),
     Step("the solved thermal model against the synthetic set's true lens",
-         _tool("calibrate") + ("validate", "{out}/thermal/thermal.cameramodel", "--truth", "{out}/synth",
-                               "--exit-zero"), "calibration/thermal"),
+         _tool("calibrate") + ("validate", "{build}/calibration/thermal/thermal.cameramodel",
+                               "--truth", "{build}/calibration/synth", "--exit-zero"), "calibration/thermal",
+         show_output=True),
 ]
 
 
@@ -84,17 +86,21 @@ def main(argv: list[str] | None = None) -> int:
     made: list[tuple[Step, Path, float]] = []
     for i, step in enumerate(STEPS, 1):
         target = out / step.out
-        cmd = tuple(a.replace("{out}", str(target)) for a in step.argv)
+        cmd = tuple(a.replace("{out}", str(target)).replace("{build}", str(out)) for a in step.argv)
         print(f"[{i}/{len(STEPS)}] {step.title}\n      $ {_display(cmd)}", flush=True)
         t0 = time.monotonic()
-        result = subprocess.run(cmd, cwd=REPO, stdout=subprocess.DEVNULL)
+        result = subprocess.run(cmd, cwd=REPO, stdout=None if step.show_output else subprocess.DEVNULL)
         if result.returncode != 0:
             print(f"demo: step {i} failed (exit {result.returncode}): {_display(cmd)}", file=sys.stderr)
             return result.returncode
         made.append((step, target, time.monotonic() - t0))
 
     print(f"\nWhat the demo made, under {out}:")
+    listed: set[Path] = set()
     for step, target, seconds in made:
+        if target in listed:  # a later step that reads or checks what an earlier one made
+            continue
+        listed.add(target)
         files = sorted(p for p in target.rglob("*") if p.is_file())
         size = sum(p.stat().st_size for p in files)
         print(f"  {step.title} ({seconds:.1f} s): {target.relative_to(out)}/  {len(files)} files, {size / 1024:.0f} KiB")

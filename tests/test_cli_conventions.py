@@ -1,10 +1,11 @@
-"""Every command of both console scripts has --help, and usage errors exit 2."""
+"""Every command of every tool (both console scripts and cad/build.py) has --help; usage errors exit 2."""
 from __future__ import annotations
 
 import argparse
 
 import pytest
 
+from cad.build import build_parser as cad_parser
 from calibration.cli import build_parser as calibrate_parser
 from platform_tools.cli.main import build_parser as platform_tools_parser
 
@@ -18,7 +19,8 @@ def all_commands(parser: argparse.ArgumentParser, prefix=()):
 
 
 TOOLS = {"platform_tools": ("platform_tools.cli.main", platform_tools_parser),
-         "calibrate": ("calibration.cli", calibrate_parser)}
+         "calibrate": ("calibration.cli", calibrate_parser),
+         "cad/build.py": ("cad.build", cad_parser)}
 CASES = [(tool, cmd) for tool, (_, build) in TOOLS.items() for cmd in all_commands(build())]
 
 

@@ -17,9 +17,6 @@ Stages:
 """
 from __future__ import annotations
 
-import contextlib
-import os
-import sys
 from dataclasses import dataclass
 
 import cv2
@@ -27,6 +24,7 @@ import numpy as np
 
 from platform_tools.frames import Pose
 
+from ..quiet import quiet_stderr
 from .cad import CAMERAS, FrameTree
 from .outputs import CameraIntrinsics
 from .sets import RigObservations
@@ -58,21 +56,6 @@ def as_opencv8(lens: CameraIntrinsics) -> np.ndarray:
         out[:len(p)] = p
         return out
     raise RigSolveError(f"cannot seed {lens.lensmodel} as {LENSMODEL}; give an OPENCV4/5/8 or pinhole model")
-
-
-@contextlib.contextmanager
-def quiet_stderr():
-    """mrcal's C code prints its progress ("Threw out some outliers ...") on fd 2; keep it off the
-    user's terminal (its results are in the report)."""
-    sys.stderr.flush()
-    saved = os.dup(2)
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 2)
-            yield
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
 
 
 def _pnp(q: np.ndarray, lens: tuple[str, np.ndarray], obj_m: np.ndarray) -> Pose | None:
