@@ -41,6 +41,7 @@ import numpy as np
 
 from .. import atomic
 from ..progress import progress
+from ..telemetry import telemetry_rows_present
 from . import thermal8
 from .calib import FRAME_OF, Calibration, CalibrationError, CameraCal, load_calibration
 from .pairing import THERMAL, plan
@@ -303,7 +304,8 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
         th_spec = rig.camera_model(rig.desc.sensors.thermal.camera_model)
         w, h = sizes["thermal_left"]
         rows = rig.desc.on_device.thermal_telemetry_rows
-        th_h = h - rows if (rows and h == round(w * th_spec.height_px / th_spec.width_px) + rows) else h
+        # Boson telemetry rows below the image (platform_tools.telemetry): not part of the picture
+        th_h = h - rows if telemetry_rows_present(w, h, th_spec.width_px, th_spec.height_px, rows) else h
         if sizes["zed_depth"] != sizes["zed_left"]:
             raise ExportError(f"{rec.path}: the depth is {sizes['zed_depth'][0]}x{sizes['zed_depth'][1]}, the ZED "
                               f"left image {sizes['zed_left'][0]}x{sizes['zed_left'][1]}: depth_registered must "

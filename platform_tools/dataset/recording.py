@@ -5,6 +5,9 @@ A recording is given as a rosbag2 folder (``metadata.yaml`` + MCAP files), a fol
 header stamp (read straight from the CDR bytes: encapsulation header, then ``int32 sec``,
 ``uint32 nanosec``), its log time (to find it again) and, for thermal images, whether its pixels
 repeat the previous frame's (a frozen frame: FFC). The thermal status topic is decoded (it is small).
+When a thermal camera has no status messages, its FFC state comes from the Boson telemetry rows of
+its frames instead (``platform_tools.telemetry``; a frozen frame is then judged on the image rows
+only: the telemetry keeps changing during an FFC).
 
 Bad input ends in :class:`RecordingError` with one line: a truncated MCAP (no index: the recorder
 was killed), a damaged one, a recording without a stream the caller needs.
@@ -49,8 +52,11 @@ class Recording:
     path: Path
     files: list[Path]
     streams: dict[str, Stream]
-    #: thermal camera -> list of (host stamp ns, ffc_status int) from the status topic
+    #: thermal camera -> list of (host stamp ns, ffc_status int): from the status topic, else from
+    #: the telemetry rows of each frame (see status_source)
     status: dict[str, list[tuple[int, int]]] = field(default_factory=dict)
+    #: thermal camera -> "status" (the status topic), "telemetry" (the frames' telemetry rows) or None
+    status_source: dict[str, str | None] = field(default_factory=dict)
     recovered: list[str] = field(default_factory=list)
 
     def has(self, name: str) -> bool:
@@ -150,6 +156,41 @@ def header_stamp(data: bytes) -> int:
     return sec * 1_000_000_000 + nsec
 
 
+def _align(pos: int, n: int) -> int:
+    """CDR alignment, counted from the end of the 4-byte encapsulation header."""
+    return 4 + ((pos - 4 + n - 1) // n) * n
+
+
+def image_layout(data: bytes) -> tuple[int, int, int, int]:
+    """(height, width, step, offset of the pixel bytes) of a CDR-serialised sensor_msgs/Image, read
+    from its fields without copying the pixels."""
+    endian = "<" if data[1] == 1 else ">"
+    u32 = struct.Struct(endian + "I")
+    pos = 12                                             # encapsulation, stamp sec + nanosec
+    pos += 4 + u32.unpack_from(data, pos)[0]             # frame_id
+    pos = _align(pos, 4)
+    height, width = struct.unpack_from(endian + "II", data, pos)
+    pos += 8
+    pos += 4 + u32.unpack_from(data, pos)[0]             # encoding
+    pos += 1                                             # is_bigendian
+    pos = _align(pos, 4)
+    step = u32.unpack_from(data, pos)[0]
+    pos = _align(pos + 4, 4)
+    n = u32.unpack_from(data, pos)[0]
+    pos += 4
+    if n < height * step or pos + n > len(data):
+        raise ValueError(f"sensor_msgs/Image of {height} rows x {step} bytes holds {n} bytes")
+    return height, width, step, pos
+
+
+def _telemetry_rows(rig, width: int, height: int) -> int:
+    """How many telemetry rows a thermal frame of this size carries (0: none)."""
+    from ..telemetry import telemetry_rows_present
+    rows = rig.desc.on_device.thermal_telemetry_rows
+    model = rig.camera_model(rig.desc.sensors.thermal.camera_model)
+    return rows if telemetry_rows_present(width, height, model.width_px, model.height_px, rows) else 0
+
+
 def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS) -> Recording:
     """Index a recording's rig streams (and the thermal FFC status)."""
     from mcap.exceptions import McapError
@@ -164,6 +205,8 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS) -
     cols: dict[str, list] = {s: [] for s in streams}
     tails: dict[str, bytes] = {}
     status: dict[str, list[tuple[int, int]]] = {c: [] for c in status_topics.values()}
+    from_telemetry: dict[str, list[tuple[int, int]]] = {c: [] for c in status_topics.values()}
+    tele_rows: dict[tuple[str, int, int], int] = {}
     decoder = DecoderFactory()
     decoders: dict[int, object] = {}
     for fi, f in enumerate(files):
@@ -175,11 +218,12 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS) -
                     s = by_topic.get(channel.topic)
                     if s is not None:
                         frozen = False
+                        stamp = header_stamp(msg.data)
                         if s.startswith("thermal"):
-                            tail = bytes(msg.data[-4096:])
+                            tail = _thermal_tail(msg.data, s, stamp, rig, tele_rows, from_telemetry)
                             frozen = tails.get(s) == tail
                             tails[s] = tail
-                        cols[s].append((header_stamp(msg.data), msg.log_time, fi, frozen))
+                        cols[s].append((stamp, msg.log_time, fi, frozen))
                     else:
                         dec = decoders.get(schema.id)
                         if dec is None:
@@ -193,11 +237,42 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS) -
         except (McapError, EOFError, struct.error, ValueError) as exc:
             raise RecordingError(f"{f}: damaged MCAP ({type(exc).__name__}: {exc}); "
                                  f"run again with --recover to salvage what is readable") from None
+    source = {}
+    for cam in status:
+        if status[cam]:
+            source[cam] = "status"
+        elif from_telemetry[cam]:
+            status[cam], source[cam] = from_telemetry[cam], "telemetry"
+        else:
+            source[cam] = None
     out = {}
     for s, rows in cols.items():
         a = np.array(rows, dtype=np.int64).reshape(-1, 4)
         out[s] = Stream(s, getattr(topics, s), a[:, 0], a[:, 1], a[:, 2].astype(np.int16),
                         a[:, 3].astype(bool) if s.startswith("thermal") else None)
-    rec = Recording(name, Path(path), files, out, status, notes)
+    rec = Recording(name, Path(path), files, out, status, status_source=source, recovered=notes)
     rec._topics = {s: getattr(topics, s) for s in streams}
     return rec
+
+
+def _thermal_tail(data: bytes, stream: str, stamp: int, rig, tele_rows: dict, from_telemetry: dict) -> bytes:
+    """The last 4 KiB of a thermal frame's image rows (to find frozen frames), after recording the
+    FFC state of its telemetry rows, when it has some, in ``from_telemetry``."""
+    from ..telemetry import TelemetryError, decode_image_data
+    try:
+        height, width, step, off = image_layout(data)
+    except (struct.error, ValueError, IndexError):
+        return bytes(data[-4096:])
+    key = (stream, width, height)
+    if key not in tele_rows:
+        tele_rows[key] = _telemetry_rows(rig, width, height)
+    rows = tele_rows[key]
+    end = off + (height - rows) * step
+    if rows:
+        cam = stream  # thermal_left / thermal_right
+        try:
+            tel = decode_image_data(memoryview(data)[off:off + height * step], height, step, rows)
+            from_telemetry[cam].append((stamp, int(tel.ffc_status)))
+        except TelemetryError:
+            pass
+    return bytes(data[max(off, end - 4096):end])

@@ -9,8 +9,9 @@ All times are the header stamps the drivers wrote (host clock). In order:
 2. Per stream: intervals (mean, std, min, max), drops (an interval above ``drop_interval_factor`` x
    the nominal period; missing frames = round(interval / period) - 1), and the per-frame jitter
    (std of the intervals that are one period, / sqrt 2: each interval is the difference of two stamps).
-3. FFC periods per thermal camera: from the status topic (ffc_status 2 = in progress), else from
-   frozen frames (pixels identical to the previous frame).
+3. FFC periods per thermal camera: from the status topic (ffc_status 2 = in progress), else from the
+   same state in the Boson telemetry rows of each frame, else from frozen frames (image pixels
+   identical to the previous frame).
 4. Pairing residuals for the thermal pair and ZED left to each thermal camera: each frame of the
    second stream against the nearest frame of the first (within half a period); mean, std, p99, max;
    a line fit over time gives the constant offset and the drift in ppm (with its standard error);
@@ -110,8 +111,11 @@ def stream_report(t: np.ndarray, period_ns: float, factor: float) -> dict:
 
 
 def ffc_periods(rec: Recording, camera: str, period_ns: float) -> list[dict]:
-    """FFC periods of a thermal camera (host stamps): from its status topic, else from frozen frames."""
+    """FFC periods of a thermal camera (host stamps): from its status topic, else from the telemetry
+    rows of its frames (``rec.status`` holds either, ``rec.status_source`` says which), else from
+    frozen frames."""
     status = rec.status.get(camera) or []
+    source = (getattr(rec, "status_source", None) or {}).get(camera) or "status"
     out = []
     if status:
         start = None
@@ -119,10 +123,10 @@ def ffc_periods(rec: Recording, camera: str, period_ns: float) -> list[dict]:
             if state == 2 and start is None:
                 start = stamp
             elif state != 2 and start is not None:
-                out.append({"start_ns": start, "end_ns": stamp, "source": "status"})
+                out.append({"start_ns": start, "end_ns": stamp, "source": source})
                 start = None
         if start is not None:
-            out.append({"start_ns": start, "end_ns": int(rec.streams[camera].stamp_ns.max()), "source": "status"})
+            out.append({"start_ns": start, "end_ns": int(rec.streams[camera].stamp_ns.max()), "source": source})
         return out
     s = rec.streams.get(camera)
     if s is None or s.frozen is None:

@@ -4,17 +4,19 @@
 from __future__ import annotations
 
 import configparser
+import io
 import re
+import shlex
 import shutil
 import subprocess
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 
 import yaml
 
 from ..checks import FAILED, OK, SKIPPED, Check
 from ..rig import Rig
-from .context import build_context
-from .launch_stub import Node, load_launch_file
+from .context import L4T_RELEASES, build_context
+from .launch_stub import ExecuteProcess, Node, load_launch_file
 
 
 
@@ -118,8 +120,9 @@ def check_params(folder: Path) -> Check:
     return Check("parameter files", OK, f"{len(files) - 1} ROS 2 parameter files parse")
 
 
-def _launched_nodes(folder: Path) -> list[Node]:
-    nodes: list[Node] = []
+def _launched_nodes(folder: Path) -> list:
+    """Every Node and ExecuteProcess the launch files start (the thermal one for both sides)."""
+    nodes: list = []
     zed = load_launch_file(folder / "launch" / "zed.launch.py")
     nodes += [e for e in zed.entities if isinstance(e, Node)]
     thermal = load_launch_file(folder / "launch" / "thermal.launch.py")
@@ -137,6 +140,8 @@ def check_launch(folder: Path, rig: Rig) -> Check:
         return Check("launch files", FAILED, f"{type(exc).__name__}: {exc}")
     problems = []
     ctx = build_context(rig)
+    procs = [n for n in nodes if isinstance(n, ExecuteProcess)]
+    nodes = [n for n in nodes if isinstance(n, Node)]
     for t in ctx["thermal"]:
         cam = [n for n in nodes if n.kwargs.get("name") == t["name"]]
         if len(cam) != 1:
@@ -148,12 +153,20 @@ def check_launch(folder: Path, rig: Rig) -> Check:
             problems.append(f"{t['name']}: parameters do not name {t['devices']['video']} / {t['frame_id']}")
         if (("image_raw", t["topic"]) not in cam[0].kwargs.get("remappings", [])):
             problems.append(f"{t['name']}: image not remapped to {t['topic']}")
+        if t["telemetry_rows"]:
+            pub = [p for p in procs if p.kwargs.get("name") == f"{t['name']}_status"]
+            cmd = pub[0].kwargs.get("cmd", []) if len(pub) == 1 else []
+            want = [f"image_topic:={t['topic']}", f"status_topic:={t['status_topic']}",
+                    f"telemetry_rows:={t['telemetry_rows']}"]
+            if "platform_tools.telemetry.node" not in cmd or any(w not in cmd for w in want):
+                problems.append(f"{t['name']}: no FFC status publisher from {t['topic']} to {t['status_topic']}")
     tfs = [n for n in nodes if n.kwargs.get("executable") == "static_transform_publisher"]
     if len(tfs) != len(ctx["static_tfs"]):
         problems.append(f"{len(tfs)} static transforms, expected {len(ctx['static_tfs'])}")
     if problems:
         return Check("launch files", FAILED, "; ".join(problems))
-    return Check("launch files", OK, f"import and build {len(nodes)} nodes ({len(tfs)} static transforms)")
+    return Check("launch files", OK, f"import and build {len(nodes)} nodes ({len(tfs)} static transforms) "
+                                     f"and {len(procs)} FFC status publishers")
 
 
 # ----------------------------------------------------------------------------- systemd, udev
@@ -221,7 +234,119 @@ def check_udev(folder: Path, rig: Rig) -> Check:
                        ("" if len(expected) == 4 else " (serial numbers not set yet)"))
 
 
+# ----------------------------------------------------------------------------- Dockerfiles
+def _parse_dockerfile(text: str):
+    from dockerfile_parse import DockerfileParser
+    return DockerfileParser(fileobj=io.BytesIO(text.encode()))
+
+
+def _copy_sources(value: str) -> list[str]:
+    """The sources of a COPY / ADD value (shell or JSON form; flags such as --chown dropped)."""
+    value = value.strip()
+    if value.startswith("["):
+        import json
+        parts = json.loads(value)
+    else:
+        parts = shlex.split(value)
+    parts = [p for p in parts if not p.startswith("--")]
+    return parts[:-1]
+
+
+def _base_ok(name: str, base: str, images: dict) -> str | None:
+    """None when ``base`` is an image for the Orin's JetPack, else why not."""
+    repo, _, tag = base.partition(":")
+    release = images["release"]
+    if repo.startswith("nvcr.io/nvidia/l4t-"):
+        if not re.fullmatch(rf"{release}\.\d+(\.\d+)?", tag):
+            return f"{base} is not L4T {release} (the image tags say l4t-{release})"
+        return None
+    if name == "zed":
+        return f"{base}: the ZED SDK needs CUDA: expected an NVIDIA L4T {release} image (nvcr.io/nvidia/l4t-*)"
+    if repo == "ros":
+        want = f"{images['ros_distro']}-ros-base-{images['ubuntu']}"
+        if not tag.startswith(f"{images['ros_distro']}-") or not tag.endswith(f"-{images['ubuntu']}"):
+            return f"{base}: expected a ROS {images['ros_distro']} image on Ubuntu {images['ubuntu']} " \
+                   f"(the Ubuntu of L4T {release}), e.g. ros:{want}"
+        return None
+    return f"{base} is neither an NVIDIA L4T image (nvcr.io/nvidia/l4t-*) nor an official ROS image"
+
+
+def check_dockerfiles(folder: Path, rig: Rig) -> Check:
+    """The Dockerfiles parse (dockerfile-parse), start from an L4T or ROS image for the Orin's JetPack,
+    COPY only what their build context holds, and every compose service's image is built by one."""
+    try:
+        import dockerfile_parse  # noqa: F401
+    except ImportError:
+        return Check("dockerfiles", SKIPPED, "dockerfile-parse is not installed (pip install dockerfile-parse)")
+    images = build_context(rig)["images"]
+    doc = yaml.safe_load((folder / "compose.yaml").read_text())
+    problems, built = [], {}
+    for svc_name, svc in (doc.get("services") or {}).items():
+        build = svc.get("build")
+        if not build:
+            problems.append(f"service {svc_name}: image {svc.get('image')} has no build section")
+            continue
+        if isinstance(build, str):
+            build = {"context": build}
+        context = (folder / build.get("context", ".")).resolve()
+        dockerfile = context / build.get("dockerfile", "Dockerfile")
+        if folder not in context.parents and context != folder:
+            problems.append(f"service {svc_name}: build context {build.get('context')} is outside the folder")
+            continue
+        if not dockerfile.is_file():
+            problems.append(f"service {svc_name}: no {dockerfile.relative_to(folder)}")
+            continue
+        if svc.get("image") not in images["tags"].values():
+            problems.append(f"service {svc_name}: image {svc.get('image')} is not one of on_device.images")
+        built.setdefault(dockerfile, (context, svc_name, svc.get("image")))
+    tags_built = {tag: df for df, (_, _, tag) in built.items()}
+    for name, tag in images["tags"].items():
+        if tag not in tags_built:
+            problems.append(f"on_device.images.{name} ({tag}) is built by no service")
+        elif tags_built[tag] != (folder / images["dockerfiles"][name]).resolve():
+            problems.append(f"{tag} is not built from {images['dockerfiles'][name]}")
+    for dockerfile, (context, svc_name, tag) in sorted(built.items()):
+        rel = dockerfile.relative_to(folder)
+        try:
+            parser = _parse_dockerfile(dockerfile.read_text())
+            structure = parser.structure
+            bases = parser.parent_images
+        except Exception as exc:  # a Dockerfile the parser rejects is the failure reported
+            problems.append(f"{rel}: does not parse ({type(exc).__name__}: {exc})")
+            continue
+        instructions = [i["instruction"] for i in structure if i["instruction"] != "COMMENT"]
+        if not bases or "FROM" not in instructions:
+            problems.append(f"{rel}: no FROM")
+        if instructions and instructions[0] not in ("FROM", "ARG"):
+            problems.append(f"{rel}: starts with {instructions[0]}, not FROM or ARG")
+        for b in bases:
+            if "$" in b:
+                problems.append(f"{rel}: base image {b} has an unresolved build argument")
+                continue
+            why = _base_ok(next((n for n, t in images["tags"].items() if t == tag), ""), b, images)
+            if why:
+                problems.append(f"{rel}: {why}")
+        for ins in structure:
+            if ins["instruction"] not in ("COPY", "ADD") or "--from=" in ins["value"]:
+                continue
+            for src in _copy_sources(ins["value"]):
+                if re.match(r"[a-z]+://", src):
+                    continue
+                path = PurePosixPath(src)
+                if path.is_absolute() or ".." in path.parts:
+                    problems.append(f"{rel}:{ins['startline'] + 1}: COPY {src} leaves the build context")
+                elif not any(context.glob(src)) and not (context / src).exists():
+                    problems.append(f"{rel}:{ins['startline'] + 1}: COPY {src}: not in the build context "
+                                    f"{context.relative_to(folder)}/")
+    if problems:
+        return Check("dockerfiles", FAILED, "; ".join(problems))
+    return Check("dockerfiles", OK, f"{len(built)} Dockerfiles parse (dockerfile-parse); bases for L4T "
+                                    f"{images['release']} / ROS {images['ros_distro']}; COPY sources in their "
+                                    f"contexts; every compose image built")
+
+
 def run_checks(folder: Path, rig: Rig) -> list[Check]:
     folder = Path(folder).resolve()   # validators run inside the folder: no relative path may leak in
     return [check_compose_valid(folder), check_compose_matches_rig(folder, rig), check_shellcheck(folder),
-            check_params(folder), check_launch(folder, rig), check_unit(folder, rig), check_udev(folder, rig)]
+            check_params(folder), check_launch(folder, rig), check_unit(folder, rig), check_udev(folder, rig),
+            check_dockerfiles(folder, rig)]

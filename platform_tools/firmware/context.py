@@ -6,6 +6,7 @@ worked out here, so a reader of a template sees only names.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, fields
 
 from ..boson.discovery import USB_PID, USB_VID
@@ -15,6 +16,26 @@ from ..rig import Rig
 THERMAL_FRAMES = ("thermal_left", "thermal_left_optical", "thermal_right", "thermal_right_optical")
 #: slack on top of the recorder's own stop escalation: MCAP check/recovery and the metadata file
 STOP_SLACK_S = 10.0
+
+
+#: L4T releases the container images can be built for (the image tags in on_device.images name one:
+#: "...-l4t-r36"): NVIDIA's JetPack container for it (CUDA, cuDNN, TensorRT: the ZED SDK's NEURAL
+#: depth needs them), its L4T version (the ZED SDK is built per L4T minor) and its Ubuntu release
+#: (which ROS 2 distributions have binary packages for it). JetPack 6.1 = L4T 36.4 on Ubuntu 22.04.
+L4T_RELEASES = {
+    "r36": {"base": "nvcr.io/nvidia/l4t-jetpack:r36.4.0", "l4t": "36.4", "jetpack": "6.1", "ubuntu": "jammy"},
+}
+#: ROS 2 distributions with arm64 binary packages on packages.ros.org, per Ubuntu release
+ROS_FOR_UBUNTU = {"jammy": ("humble", "iron"), "noble": ("jazzy",)}
+#: the ZED SDK major.minor for the L4T above, and the zed-ros2-wrapper release built against it
+#: (download.stereolabs.com/zedsdk/<sdk>/l4t<l4t>/jetsons; the wrapper tag must match the SDK: verify
+#: both exist before the first build on the Orin)
+ZED_SDK = "4.2"
+ZED_ROS2_WRAPPER_REF = "humble-v4.2.5"
+#: where the rendered folder keeps what the image builds need (compose.yaml's build contexts)
+DOCKER_DIR = "docker"
+#: this repository's installable source inside that folder (the thermal and tools images install it)
+SOURCE_DIR = "src/rgbt-rig"
 
 
 @dataclass(frozen=True)
@@ -81,7 +102,42 @@ def thermal_context(rig: Rig, side: str) -> dict:
         "frame_id": f"thermal_{side}_optical",
         "topic": getattr(od.topics, f"thermal_{side}"),
         "status_topic": getattr(od.topics, f"thermal_{side}_status"),
+        "telemetry_rows": od.thermal_telemetry_rows,
     }
+
+
+def images_context(rig: Rig) -> dict:
+    """The three images: tags, the L4T release their tags name, the base image and ROS distribution."""
+    od = rig.desc.on_device
+    tags = {name: getattr(od.images, name) for name in ("zed", "thermal", "tools")}
+    releases = {}
+    for name, tag in tags.items():
+        m = re.search(r"l4t-(r\d+)", tag)
+        if m is None:
+            raise ValueError(f"on_device.images.{name}: {tag!r} names no L4T release (expected a tag with "
+                             f"l4t-rNN, e.g. l4t-r36): the image's base must match the Orin's JetPack")
+        releases[name] = m.group(1)
+    if len(set(releases.values())) != 1:
+        raise ValueError(f"on_device.images: the tags name different L4T releases "
+                         f"({', '.join(f'{k} {v}' for k, v in releases.items())}): one Orin runs one JetPack")
+    release = next(iter(releases.values()))
+    if release not in L4T_RELEASES:
+        raise ValueError(f"on_device.images: L4T {release} has no known base image; known: {', '.join(L4T_RELEASES)}")
+    l4t = L4T_RELEASES[release]
+    if od.ros_distro not in ROS_FOR_UBUNTU[l4t["ubuntu"]]:
+        raise ValueError(f"on_device.ros_distro: {od.ros_distro} has no binary packages for L4T {release} "
+                         f"(Ubuntu {l4t['ubuntu']}); use one of {', '.join(ROS_FOR_UBUNTU[l4t['ubuntu']])}")
+    for name, tag in tags.items():
+        named = [d for u in ROS_FOR_UBUNTU.values() for d in u if re.search(rf"\b{d}\b", tag)]
+        if named and od.ros_distro not in named:
+            raise ValueError(f"on_device.images.{name}: {tag!r} names ROS {named[0]}, on_device.ros_distro is "
+                             f"{od.ros_distro}")
+    return {"tags": tags, "release": release, **l4t, "ros_distro": od.ros_distro,
+            # the official ROS image (multi-arch: arm64) on the Ubuntu of this L4T, for the images without CUDA
+            "ros_base": f"ros:{od.ros_distro}-ros-base-{l4t['ubuntu']}",
+            "zed_sdk": ZED_SDK, "zed_wrapper_ref": ZED_ROS2_WRAPPER_REF,
+            "dir": DOCKER_DIR, "source_dir": SOURCE_DIR,
+            "dockerfiles": {name: f"{DOCKER_DIR}/{name}/Dockerfile" for name in tags}}
 
 
 def build_context(rig: Rig) -> dict:
@@ -115,4 +171,5 @@ def build_context(rig: Rig) -> dict:
         "split_duration_s": int(math.ceil(rec.split_duration_s)),
         "cache_bytes": rec.cache_mb * 1024 * 1024,
         "config_dir": f"{od.install_dir}/config",
+        "images": images_context(rig),
     }

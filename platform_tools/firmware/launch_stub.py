@@ -43,6 +43,10 @@ class PythonLaunchDescriptionSource(Recorded):
     pass
 
 
+class ExecuteProcess(Recorded):
+    pass
+
+
 class DeclareLaunchArgument(Recorded):
     pass
 
@@ -74,7 +78,8 @@ def _modules() -> dict[str, types.ModuleType]:
     return {
         "launch": module("launch", LaunchDescription=LaunchDescription),
         "launch.actions": module("launch.actions", IncludeLaunchDescription=IncludeLaunchDescription,
-                                 DeclareLaunchArgument=DeclareLaunchArgument, OpaqueFunction=OpaqueFunction),
+                                 DeclareLaunchArgument=DeclareLaunchArgument, OpaqueFunction=OpaqueFunction,
+                                 ExecuteProcess=ExecuteProcess),
         "launch.substitutions": module("launch.substitutions", LaunchConfiguration=LaunchConfiguration),
         "launch.launch_description_sources": module("launch.launch_description_sources",
                                                     PythonLaunchDescriptionSource=PythonLaunchDescriptionSource),

@@ -19,7 +19,13 @@ from .. import atomic
 from ..rig import Rig
 from .context import build_context
 
-TEMPLATES = Path(__file__).resolve().parents[2] / "firmware" / "templates"
+REPO = Path(__file__).resolve().parents[2]
+TEMPLATES = REPO / "firmware" / "templates"
+#: what of this repository the thermal and tools images install (pip install --no-deps): the package
+#: metadata and the platform_tools package (not the workstation's cad/bom/calibration)
+SOURCE_FILES = ("pyproject.toml", "README.md")
+SOURCE_PACKAGES = ("platform_tools",)
+SOURCE_SUFFIXES = (".py", ".yaml", ".j2", ".html", ".css")
 
 
 @dataclass(frozen=True)
@@ -27,6 +33,7 @@ class Output:
     path: str          # relative to the output folder
     text: str
     executable: bool = False
+    vendored: bool = False   # a copy of this repository's source (docker build context), not a template
 
 
 def _environment() -> jinja2.Environment:
@@ -70,7 +77,21 @@ def render(rig: Rig) -> list[Output]:
         outputs.append(Output(f"config/{t['name']}.yaml", tpl("config/thermal.yaml.j2", t=t)))
     for script in ("rig-up.sh", "rig-down.sh", "ros-entry.sh", "install.sh"):
         outputs.append(Output(f"bin/{script}", tpl(f"bin/{script}.j2"), executable=True))
+    images = ctx["images"]
+    for name, path in images["dockerfiles"].items():
+        outputs.append(Output(path, tpl(f"docker/{name}/Dockerfile.j2")))
+    outputs.append(Output(f"{images['dir']}/.dockerignore", tpl("docker/dockerignore.j2")))
+    outputs += source_outputs(f"{images['dir']}/{images['source_dir']}")
     return outputs
+
+
+def source_outputs(prefix: str) -> list[Output]:
+    """This repository's installable source, copied into the images' build context."""
+    files = [REPO / f for f in SOURCE_FILES]
+    for pkg in SOURCE_PACKAGES:
+        files += sorted(p for p in (REPO / pkg).rglob("*")
+                        if p.is_file() and p.suffix in SOURCE_SUFFIXES and "__pycache__" not in p.parts)
+    return [Output(f"{prefix}/{p.relative_to(REPO).as_posix()}", p.read_text(), vendored=True) for p in files]
 
 
 def warnings(rig: Rig) -> list[str]:

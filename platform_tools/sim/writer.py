@@ -13,8 +13,9 @@ from mcap_ros2.writer import Writer
 from .. import atomic
 from ..progress import progress
 from ..rig import Rig
+from ..telemetry import decode as telemetry
 from . import geometry, msgs
-from .timeline import SimParams, Timeline, build, ffc_state
+from .timeline import NS, SimParams, Timeline, build, ffc_state
 
 LATENCY_NS = {"image": 6_000_000, "imu": 1_000_000, "status": 2_000_000}
 
@@ -25,6 +26,41 @@ def _sizes(rig: Rig, scale: float) -> dict[str, tuple[int, int]]:
     down = rig.desc.on_device.zed_pub_downscale_factor
     return {"zed": (max(8, int(zed.width_px / down * scale)), max(8, int(zed.height_px / down * scale))),
             "thermal": (max(8, int(th.width_px * scale)), max(8, int(th.height_px * scale)))}
+
+
+#: the Bosons' frame counters when the recording starts (they count every trigger pulse since boot),
+#: and how many frames before that their last FFC ran
+COUNTER_BASE = {"thermal_left": 183_000, "thermal_right": 179_500}
+BOOT_FFC_FRAMES_AGO = 2_700
+
+
+class BosonTelemetry:
+    """What each simulated Boson writes in its telemetry rows: its frame counter (one per trigger
+    pulse, whether or not the host receives the frame), the FFC state of the timeline's truth (the
+    same as the status topic), and the counter at the start of its last FFC."""
+
+    def __init__(self, tl: Timeline, rows: int, width: int):
+        self.tl, self.rows, self.width_px = tl, rows, width
+        self.enabled = rows > 0 and rows * width * 2 >= telemetry.MIN_LINE_BYTES
+        period_ns = NS / tl.rate_hz
+        self.ffc_start_pulse: dict[str, list[int]] = {}
+        for e in tl.ffc:   # the first pulse captured during the FFC (true clock): the first frozen frame
+            cam = e["camera"]
+            frozen = [f.index for f in tl.frames if f.camera == cam and f.frozen
+                      and e["start_ns"] - period_ns <= f.stamp_ns - self._step(f.stamp_ns) < e["end_ns"] + period_ns]
+            first = (e["start_ns"] - tl.params.start_ns - tl.offsets_ms[cam] * 1e6) / period_ns
+            self.ffc_start_pulse.setdefault(cam, []).append(min(frozen) if frozen else int(np.ceil(first)))
+
+    def _step(self, host_ns: int) -> int:
+        step = self.tl.clock_step
+        return step["step_ns"] if host_ns >= step["true_ns"] + step["step_ns"] else 0
+
+    def line(self, camera: str, index: int, stamp_ns: int) -> bytes:
+        base = COUNTER_BASE[camera]
+        started = [k for k in self.ffc_start_pulse.get(camera, []) if k <= index]
+        ffc_frame = base + max(started) if started else base - BOOT_FFC_FRAMES_AGO
+        return telemetry.encode_line(base + index, ffc_state(self.tl, camera, stamp_ns), ffc_frame,
+                                     self.rows * 2 * self.width_px)
 
 
 def _events(tl: Timeline) -> list[tuple[int, str, object]]:
@@ -58,6 +94,7 @@ def simulate(rig: Rig, out: Path, params: SimParams, scale: float = 0.25) -> dic
 
             events = _events(tl)
             renderer = geometry.SceneRenderer(rig, sizes)
+            tele = BosonTelemetry(tl, rig.desc.on_device.thermal_telemetry_rows, sizes["thermal"][0])
             for log_ns, kind, item in progress(events, desc="simulate-rig", unit="msg"):
                 if kind == "frame":
                     t_s = (item.index / tl.rate_hz)
@@ -72,6 +109,10 @@ def simulate(rig: Rig, out: Path, params: SimParams, scale: float = 0.25) -> dic
                             raw = geometry.counts_from_c(geometry.temperature_c(r, boxes, renderer.scene))
                             px = np.clip(raw + rng.normal(0, 8, raw.shape), 0, 65535).astype(np.uint16)
                             last_thermal[item.camera] = px
+                        if tele.enabled:   # the image may be frozen (FFC), the telemetry never is
+                            px = np.vstack([px, np.zeros((tele.rows, px.shape[1]), np.uint16)])
+                            px = telemetry.write_into(px, tele.line(item.camera, item.index, item.stamp_ns),
+                                                      tele.rows)
                         put(getattr(topics, item.camera), "sensor_msgs/Image",
                             msgs.image(item.stamp_ns, frame_id, px, "mono16"), log_ns)
                     else:
@@ -105,6 +146,9 @@ def simulate(rig: Rig, out: Path, params: SimParams, scale: float = 0.25) -> dic
             "topics_with_message_count": [{"topic_metadata": {"name": t, "serialization_format": "cdr"},
                                            "message_count": c} for t, c in counts.items()]}}, sort_keys=False))
         truth = tl.truth() | {"rig_hash": rig.hash, "topics": counts, "image_sizes": sizes, "scale": scale,
+                              "telemetry": {"rows": tele.rows if tele.enabled else 0, "location": "bottom",
+                                            "frame_counter_base": COUNTER_BASE,
+                                            "ffc_start_pulse": tele.ffc_start_pulse},
                               "scene": renderer.scene,
                               "cameras": {k: {"frame": c.name, "lensmodel": c.lensmodel,
                                               "intrinsics": c.intrinsics.tolist(), "size": [c.width, c.height]}

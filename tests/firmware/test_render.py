@@ -54,7 +54,7 @@ def test_snapshot_of_the_default_rig():
     UPDATE_SNAPSHOTS=1 and review the diff."""
     rig = load_rig(None, [SERIALS[1], SERIALS[3]])
     files = {o.path: o.text.replace(rig.hash, "<rig-hash>").replace(rig.hash[:12], "<rig-hash>")
-             for o in render(rig) if o.path != "config/rig.yaml"}
+             for o in render(rig) if o.path != "config/rig.yaml" and not o.vendored}   # not the copied source
     if os.environ.get("UPDATE_SNAPSHOTS"):
         for path, text in files.items():
             (SNAPSHOTS / path).parent.mkdir(parents=True, exist_ok=True)
@@ -164,6 +164,10 @@ def test_a_bad_rig_value_is_one_line_and_exit_2(platform_tools, tmp_path):
     (("systemd/rgbt-rig.service", "RestartSec=10", "RestartSec=10\nFrobnicate=yes"), "systemd unit"),
     (("udev/99-rgbt-boson.rules", 'SYMLINK+="boson_left_video"', 'SYMLINK+=boson_left_video'), "udev rules"),
     (("compose.yaml", "    init: true", "    init: true\n    bogus_key: 1"), "compose valid"),
+    (("docker/tools/Dockerfile", "COPY src/rgbt-rig", "COPY src/not-there"), "dockerfiles"),
+    (("docker/zed/Dockerfile", "l4t-jetpack:r36.4.0", "l4t-jetpack:r35.4.1"), "dockerfiles"),
+    (("launch/thermal.launch.py", '"platform_tools.telemetry.node"', '"platform_tools.telemetry.nod"'),
+     "launch files"),
 ])
 def test_check_command_catches_a_tampered_file(platform_tools, tmp_path, edit, check):
     out = tmp_path / "fw"
@@ -179,3 +183,52 @@ def test_check_command_catches_a_tampered_file(platform_tools, tmp_path, edit, c
     assert r.returncode == 1
     assert results[check] == FAILED
     assert [n for n, s in results.items() if s == FAILED] == [check]
+
+
+# ----------------------------------------------------------------------------- images
+def test_dockerfiles_follow_the_rig_and_compose_builds_them():
+    files = rendered(*SERIALS[1::2])
+    compose = yaml.safe_load(files["compose.yaml"])["services"]
+    assert compose["zed"]["build"] == {"context": "./docker", "dockerfile": "zed/Dockerfile"}
+    assert compose["thermal_right"]["build"]["dockerfile"] == "thermal/Dockerfile"
+    assert compose["health"]["build"]["dockerfile"] == "tools/Dockerfile"
+    assert "ARG BASE_IMAGE=nvcr.io/nvidia/l4t-jetpack:r36.4.0" in files["docker/zed/Dockerfile"]
+    assert "ARG ROS_DISTRO=humble" in files["docker/zed/Dockerfile"]
+    assert "ARG BASE_IMAGE=ros:humble-ros-base-jammy" in files["docker/thermal/Dockerfile"]
+    assert "usb-cam" in files["docker/thermal/Dockerfile"] and "rosbag2-storage-mcap" in files["docker/tools/Dockerfile"]
+    assert "Jetson.GPIO" in files["docker/tools/Dockerfile"]
+    # this repository's source is in the build context the thermal and tools images COPY
+    assert "docker/src/rgbt-rig/pyproject.toml" in files
+    assert "docker/src/rgbt-rig/platform_tools/telemetry/node.py" in files
+    assert not any("__pycache__" in p for p in files)
+
+
+def test_ros_distro_reaches_the_dockerfiles():
+    files = rendered("on_device.ros_distro=iron", "on_device.images.zed=a/zed:iron-l4t-r36",
+                     "on_device.images.thermal=a/th:iron-l4t-r36", "on_device.images.tools=a/tools:iron-l4t-r36")
+    assert "ARG BASE_IMAGE=ros:iron-ros-base-jammy" in files["docker/tools/Dockerfile"]
+    assert "ARG ROS_DISTRO=iron" in files["docker/zed/Dockerfile"]
+
+
+@pytest.mark.parametrize("override,message", [
+    ("on_device.images.zed=a/zed:humble-l4t-r35", "different L4T releases"),
+    ("on_device.images.tools=a/tools:latest", "names no L4T release"),
+    ("on_device.ros_distro=jazzy", "no binary packages for L4T r36"),
+])
+def test_images_that_cannot_match_the_orin_are_one_line_and_exit_2(platform_tools, tmp_path, override, message):
+    r = platform_tools("firmware", "render", "--out", str(tmp_path / "fw"), "--set", override)
+    assert r.returncode == 2, r.stderr
+    assert message in r.stderr and "Traceback" not in r.stderr
+    assert not (tmp_path / "fw").exists()
+
+
+def test_the_status_publisher_is_launched_for_each_side(default_render):
+    from platform_tools.firmware.launch_stub import load_launch_file
+    desc = load_launch_file(default_render / "launch" / "thermal.launch.py")
+    fn = next(e for e in desc.entities if hasattr(e, "run"))
+    for side in ("left", "right"):
+        (proc,) = [e for e in fn.run({"side": side}) if e.kwargs.get("name") == f"thermal_{side}_status"]
+        cmd = proc.kwargs["cmd"]
+        assert cmd[:3] == ["python3", "-m", "platform_tools.telemetry.node"]
+        assert f"image_topic:=/thermal/{side}/image_raw" in cmd and f"status_topic:=/thermal/{side}/status" in cmd
+        assert "telemetry_rows:=2" in cmd

@@ -45,7 +45,10 @@ def test_every_rig_topic_with_its_ros_type(sim):
     assert types[t.zed_depth] == {"sensor_msgs/msg/Image"} and types[t.zed_imu] == {"sensor_msgs/msg/Imu"}
     assert types[t.thermal_right_status] == {"diagnostic_msgs/msg/DiagnosticArray"}
     img = msgs[t.thermal_left][0][2]
-    assert img.encoding == "mono16" and img.width == 64 and img.height == 51 and len(img.data) == 64 * 51 * 2
+    rows = rig.desc.on_device.thermal_telemetry_rows      # Boson telemetry rows below the 64x51 image
+    assert truth["telemetry"]["rows"] == rows == 2
+    assert img.encoding == "mono16" and img.width == 64 and img.height == 51 + rows
+    assert len(img.data) == 64 * (51 + rows) * 2
     assert img.header.frame_id == "thermal_left_optical"
     assert {k: len(v) for k, v in msgs.items()} == truth["topics"]
 
@@ -75,9 +78,11 @@ def test_ffc_freezes_the_image_and_shows_in_the_status(sim):
     rig, _, truth, msgs = sim
     t = rig.desc.on_device.topics
     ffc = next(e for e in truth["ffc"] if e["camera"] == "thermal_left")
+    tele = truth["telemetry"]["rows"] * 64 * 2
     frames = [(stamp(m), bytes(m.data)) for _, _, m in msgs[t.thermal_left]]
     during = [d for s, d in frames if ffc["start_ns"] <= s < ffc["end_ns"]]
-    assert len(during) >= 10 and len(set(during)) == 1                 # frozen for ~0.5 s
+    assert len(during) >= 10 and len({d[:-tele] for d in during}) == 1   # the image frozen for ~0.5 s
+    assert len({d[-tele:] for d in during}) == len(during)               # the telemetry rows never are
     outside = [d for s, d in frames if s < ffc["start_ns"]]
     assert len(set(outside)) == len(outside)                          # live otherwise
     states = {kv.value for _, _, m in msgs[t.thermal_left_status] for kv in m.status[0].values
@@ -104,3 +109,32 @@ def test_command_follows_the_trigger_rate(platform_tools, tmp_path):
 def test_bad_duration_is_one_line_exit_2(platform_tools, tmp_path):
     r = platform_tools("simulate-rig", "--out", str(tmp_path / "s"), "--duration", "0")
     assert r.returncode == 2 and "--duration" in r.stderr and not (tmp_path / "s").exists()
+
+
+def test_telemetry_rows_agree_with_the_trigger_and_the_status_topic(sim):
+    """The Bosons' telemetry: a counter of trigger pulses (dropped frames included), the FFC state the
+    status topic publishes, and the counter at the start of the last FFC."""
+    from platform_tools.telemetry import decode_frame
+    rig, _, truth, msgs = sim
+    t = rig.desc.on_device.topics
+    rows = truth["telemetry"]["rows"]
+    period_ns = 1e9 / truth["rate_hz"]
+    for cam in ("thermal_left", "thermal_right"):
+        frames = [m for _, _, m in msgs[getattr(t, cam)]]
+        tel = [decode_frame(np.frombuffer(m.data, "<u2").reshape(m.height, m.width), rows) for m in frames]
+        counters = np.array([x.frame_counter for x in tel])
+        assert np.all(np.diff(counters) >= 1)
+        assert int(np.sum(np.diff(counters) - 1)) == len(truth["dropped"][cam])   # the drops, exactly
+        base = truth["telemetry"]["frame_counter_base"][cam]
+        assert counters[0] - base == next(k for k in range(10) if k not in truth["dropped"][cam])
+        status = sorted((stamp(m), int(kv.value)) for _, _, m in msgs[getattr(t, f"{cam}_status")]
+                        for kv in m.status[0].values if kv.key == "ffc_status")
+        ffc = next(e for e in truth["ffc"] if e["camera"] == cam)
+        start = truth["telemetry"]["ffc_start_pulse"][cam][0] + truth["telemetry"]["frame_counter_base"][cam]
+        for m, x in zip(frames, tel):
+            prior = [v for s, v in status if s <= stamp(m)]
+            assert int(x.ffc_status) == prior[-1]                         # the state the status topic says
+            if x.frame_counter >= start:
+                assert x.ffc_frame == start and x.frames_since_ffc == x.frame_counter - start
+        in_ffc = [stamp(m) for m, x in zip(frames, tel) if x.ffc_in_progress]
+        assert abs(in_ffc[0] - ffc["start_ns"]) < 2 * period_ns and abs(in_ffc[-1] - ffc["end_ns"]) < 2 * period_ns

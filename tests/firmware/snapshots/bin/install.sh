@@ -19,4 +19,5 @@ udevadm trigger --subsystem-match=video4linux --subsystem-match=tty
 install -m 644 "$src/systemd/rgbt-rig.service" /etc/systemd/system/rgbt-rig.service
 systemctl daemon-reload
 systemctl enable rgbt-rig.service
-echo "install: done; start now with: systemctl start rgbt-rig.service"
+echo "install: done; build the images once (and after each new render), then start:"
+echo "  cd $INSTALL_DIR && docker compose -p rgbt-rig build && systemctl start rgbt-rig.service"
