@@ -29,6 +29,9 @@ ANGLE_TOL = np.radians(20.0)
 LINE_AGREE_TOL = np.radians(25.0)
 SPACING_RATIO = 1.6
 K_NEIGHBOURS = 10
+CLOSED_REF = 0.5    # squares past the last corner line: at least this share of the inner squares' amplitude
+CLOSED_STRONG = 0.2  # ... below this share: the board ends there, whatever the other end shows
+CLOSED_OUT = 0.4   # and the next 'squares' below this share of them: the board ends there
 
 
 @dataclass(frozen=True)
@@ -230,7 +233,7 @@ def _end_state(g: np.ndarray, pos: dict, axis: int, end: int, n_other: int) -> s
     H, W = g.shape
     line = 0 if end == 0 else max(k[axis] for k in pos)
     inward = 1 if end == 0 else -1
-    ms, ref, out = [], [], []
+    ms, inn, ref, out = [], [], [], []
     for m in range(n_other - 1):
         def P(a, b):
             key = [0, 0]
@@ -243,27 +246,55 @@ def _end_state(g: np.ndarray, pos: dict, axis: int, end: int, n_other: int) -> s
         mid = (p0a + p0b) / 2
         step = ((p0a - p1a) + (p0b - p1b)) / 2        # one square outwards
         ms.append(m)
+        inn.append(mid - 0.5 * step)                  # centre of the last square inside the grid
         ref.append(mid + 0.5 * step)                  # centre of the square just past the line
         out.append(mid + 1.5 * step)                  # centre of the next square, if the board goes on
     if len(ms) < 2:
         return "unknown"
-    ms, ref, out = np.array(ms), np.array(ref), np.array(out)
+    ms, inn, ref, out = np.array(ms), np.array(inn), np.array(ref), np.array(out)
     ok = np.all((out >= 1) & (out <= [W - 2, H - 2]), axis=1) & np.all((ref >= 1) & (ref <= [W - 2, H - 2]), axis=1)
     if ok.sum() < 2:
         return "unknown"
-    ms, ref, out = ms[ok], ref[ok], out[ok]
+    ms, inn, ref, out = ms[ok], inn[ok], ref[ok], out[ok]
     sgn = np.where(ms % 2 == 0, 1.0, -1.0)
-    v_ref = map_coordinates(g, [ref[:, 1], ref[:, 0]], order=1, mode="nearest")
-    v_out = map_coordinates(g, [out[:, 1], out[:, 0]], order=1, mode="nearest")
-    a_ref = abs(np.mean(sgn * (v_ref - v_ref.mean())))
-    a_out = abs(np.mean(sgn * (v_out - v_out.mean())))
-    if a_ref <= 0.2:
+
+    def amp(pts):
+        v = map_coordinates(g, [pts[:, 1], pts[:, 0]], order=1, mode="nearest")
+        return abs(np.mean(sgn * (v - v.mean())))
+    a_in, a_ref, a_out = amp(inn), amp(ref), amp(out)
+    # the squares just past the line must be seen about as clearly as those inside; otherwise
+    # (faint rim, heavy blur) nothing can be said about what lies past them
+    if a_ref <= 0.2 or a_ref < CLOSED_REF * a_in:
         return "unknown"
-    if a_out < 0.4 * a_ref:
+    if a_out < CLOSED_STRONG * a_ref:
+        return "closed!"
+    if a_out < CLOSED_OUT * a_ref:
         return "closed"
     if a_out > 0.7 * a_ref:
         return "open"
     return "unknown"
+
+
+def _next_line_inside(shape, pos: dict, axis: int, end: int, margin: float = 4.0) -> float:
+    """Share of the next lattice line past ``end`` of ``axis`` (extrapolated from the last two
+    lines) that falls inside the image (``margin`` pixels from its edges)."""
+    H, W = shape
+    line = 0 if end == 0 else max(k[axis] for k in pos)
+    inward = 1 if end == 0 else -1
+    pts = []
+    for k, p in pos.items():
+        if k[axis] != line:
+            continue
+        key = list(k)
+        key[axis] = line + inward
+        q = pos.get(tuple(key))
+        if q is not None:
+            pts.append(2 * np.asarray(p) - np.asarray(q))
+    if not pts:
+        return 0.0
+    pts = np.array(pts)
+    return float(np.mean((pts[:, 0] >= margin) & (pts[:, 1] >= margin) &
+                         (pts[:, 0] <= W - 1 - margin) & (pts[:, 1] <= H - 1 - margin)))
 
 
 def anchor(g: np.ndarray, xy: np.ndarray, ij: np.ndarray, W: int, H: int) -> tuple[np.ndarray | None, str]:
@@ -280,6 +311,16 @@ def anchor(g: np.ndarray, xy: np.ndarray, ij: np.ndarray, W: int, H: int) -> tup
             continue
         lo = _end_state(g, pos, axis, 0, n_other)
         hi = _end_state(g, pos, axis, 1, n_other)
+        # a weak 'closed' (the next squares faint, not gone) counts only when the other end
+        # positively goes on, or the corners missing there would lie outside the image; a faint
+        # last row of squares inside the image looks the same as the board's border otherwise
+        for end, this, other in ((0, lo, hi), (1, hi, lo)):
+            if this == "closed" and other != "open" and _next_line_inside(g.shape, pos, axis, 1 - end) > 0.5:
+                if end == 0:
+                    lo = "unknown"
+                else:
+                    hi = "unknown"
+        lo, hi = lo.rstrip("!"), hi.rstrip("!")
         if lo == "closed" and hi != "closed":
             continue
         if hi == "closed" and lo != "closed":

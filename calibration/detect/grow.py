@@ -34,6 +34,8 @@ NEIGH = ((1, 0), (-1, 0), (0, 1), (0, -1))
 MAX_ROUNDS = 40
 WEAKEST_SQUARE = 0.4             # each square at least this share of the checker amplitude
 MIN_SADDLE = 0.2                 # saddle response at least this share of the grid's median
+WEAKEST_INNER = 0.2             # ... for a point inside the grid's bounding box
+MIN_SADDLE_INNER = 0.2
 SEARCH_R = 6                     # largest search radius, pixels
 
 
@@ -218,8 +220,12 @@ def grow(g: np.ndarray, S: np.ndarray, xy: np.ndarray, ij: np.ndarray, strength:
             off = np.where(inner & (den < 0), 0.5 * (a - b) / np.where(den < 0, den, -1.0), 0.0)
             loc[:, axis] += np.clip(off, -0.5, 0.5)
         amp, weakest = _squares(g, loc, US, VS, T)
-        ok &= (amp * parity >= min_amp) & (weakest >= WEAKEST_SQUARE)
-        ok &= vals[rows, k] >= MIN_SADDLE * S_seed
+        # a point inside the labelled grid's bounding box is on the board whatever its squares look
+        # like (the board is a lattice rectangle holding the grid): only there a faint square or
+        # saddle is accepted
+        inner_pt = (T[:, 0] >= i0) & (T[:, 0] <= i1) & (T[:, 1] >= j0) & (T[:, 1] <= j1)
+        ok &= (amp * parity >= min_amp) & (weakest >= np.where(inner_pt, WEAKEST_INNER, WEAKEST_SQUARE))
+        ok &= vals[rows, k] >= np.where(inner_pt, MIN_SADDLE_INNER, MIN_SADDLE) * S_seed
         # the four quarter squares sampled must lie in the image (no made-up edge pixels)
         reach = 0.5 * (np.abs(US) + np.abs(VS))
         ok &= np.all((loc - reach >= 0) & (loc + reach <= [Ww - 1, Hh - 1]), axis=1)
@@ -251,24 +257,31 @@ def lattice_outliers(xy: np.ndarray, ij: np.ndarray, tol: float = 0.3) -> np.nda
     """Mask of corners farther than ``tol`` x the local step from where their labelled neighbours
     put them, of corners with fewer than two neighbour predictions (nothing vouches for their
     label), and of pairs of labels at (nearly) one image position (one of them is mislabelled:
-    both go)."""
-    pos = {tuple(k): p for k, p in zip(ij.tolist(), xy) if np.isfinite(p[0])}
+    both go). Repeated until nothing changes: a corner vouched for only by corners dropped here
+    has lost its support."""
     bad = np.zeros(len(xy), bool)
-    for n, (k, p) in enumerate(zip(map(tuple, ij.tolist()), xy)):
-        if not np.isfinite(p[0]):
-            continue
-        r = predict(pos, k)
-        if r is None or r[3] < 2:
-            bad[n] = True                 # too little support to vouch for its label
-            continue
-        q, u, v, _ = r
-        step = min(np.linalg.norm(u), np.linalg.norm(v))
-        if np.linalg.norm(p - q) > tol * step:
-            bad[n] = True
     fin = np.flatnonzero(np.isfinite(xy[:, 0]))
     if len(fin) > 1:
         from scipy.spatial import cKDTree
         d, nb = cKDTree(xy[fin]).query(xy[fin], k=2)
         step = np.median(d[:, 1])
         bad[fin[d[:, 1] < 0.4 * step]] = True
+    keys = list(map(tuple, ij.tolist()))
+    for _ in range(len(xy)):
+        pos = {k: p for k, p, b in zip(keys, xy, bad) if np.isfinite(p[0]) and not b}
+        new = bad.copy()
+        for n, (k, p) in enumerate(zip(keys, xy)):
+            if bad[n] or not np.isfinite(p[0]):
+                continue
+            r = predict(pos, k)
+            if r is None or r[3] < 2:
+                new[n] = True             # too little support to vouch for its label
+                continue
+            q, u, v, _ = r
+            step = min(np.linalg.norm(u), np.linalg.norm(v))
+            if np.linalg.norm(p - q) > tol * step:
+                new[n] = True
+        if (new == bad).all():
+            break
+        bad = new
     return bad
