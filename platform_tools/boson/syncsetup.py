@@ -19,6 +19,7 @@ from dataclasses import asdict, dataclass, field
 from enum import IntEnum
 from typing import Any
 
+from ..telemetry.decode import EXPECTED_LOCATION
 from . import commands as C
 from .client import BosonClient
 from .codes import BosonError, CameraError, IdentityMismatch
@@ -31,11 +32,18 @@ class Setting:
     key: str
     get: C.Command
     set: C.Command
+    #: commands sent just before this setting is written, for companions that have no getter in the
+    #: protocol reference (so they cannot be diffed or read back): sent only when this setting changes
+    before_set: tuple[tuple[C.Command, IntEnum], ...] = ()
 
 
 SETTINGS: dict[str, Setting] = {
     "ext_sync_mode": Setting("ext_sync_mode", C.GET_EXT_SYNC, C.SET_EXT_SYNC),
     "display_mode": Setting("display_mode", C.GET_DISPLAY_MODE, C.SET_DISPLAY_MODE),
+    # telemetry rows carry the FFC status the recorder needs (platform_tools.telemetry); they go
+    # where the decoder expects them before they are switched on
+    "telemetry_state": Setting("telemetry_state", C.GET_TELEMETRY, C.SET_TELEMETRY, before_set=(
+        (C.SET_TELEMETRY_LOCATION, C.TelemetryLocation[EXPECTED_LOCATION.upper()]),)),
 }
 
 SYNC_MODES = {"slave": C.ExtSyncMode.SLAVE, "master": C.ExtSyncMode.MASTER, "disabled": C.ExtSyncMode.DISABLE}
@@ -100,6 +108,9 @@ def diff(current: dict[str, Any], desired: dict[str, IntEnum]) -> list[tuple[str
 
 def apply(client: BosonClient, changes, result: CameraResult) -> None:
     for key, _, value in changes:
+        for command, companion in SETTINGS[key].before_set:
+            client.call(command, companion)
+            result.steps.append(f"{command.name} {C.enum_name(companion)} (not read back: no getter)")
         client.call(SETTINGS[key].set, value)
         result.steps.append(f"set {key} {C.enum_name(value)}")
 

@@ -173,6 +173,8 @@ def _plan(args, rig) -> syncsetup.Plan:
     desired = {"ext_sync_mode": syncsetup.SYNC_MODES[mode]}
     if args.display_mode:
         desired["display_mode"] = C.DisplayMode[args.display_mode.upper().replace("-", "_")]
+    if rig.desc.on_device.thermal_telemetry_rows > 0:  # the rig records FFC status from telemetry rows
+        desired["telemetry_state"] = C.TelemetryState.ENABLED
     persist = sync.persist if args.persist is None else args.persist
     if args.check_seconds <= 0:
         raise UserError("--check-seconds must be positive")

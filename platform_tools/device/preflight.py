@@ -7,6 +7,7 @@
                 serial port, answering with the serial number the rig description expects
 4. trigger      each Boson's ISP frame counter advances at sync.rate_hz (the capture card's trigger)
 5. sync mode    each Boson's external sync mode is sync.boson_mode
+6. telemetry    each Boson's telemetry rows are on when on_device.thermal_telemetry_rows > 0
 
 Camera checks go through the Boson tooling (platform_tools.boson); with ``boson=False`` they are
 reported as skipped, never as passed.
@@ -88,5 +89,6 @@ def run_preflight(rig: Rig, output_dir: Path | None = None, *, boson: bool = Tru
     if boson:
         report.checks += _boson_checks(rig, dev_dir, report)
     else:
-        report.checks += [Check(n, SKIPPED, "--no-boson") for n in ("thermal cameras", "trigger", "sync mode")]
+        report.checks += [Check(n, SKIPPED, "--no-boson")
+                          for n in ("thermal cameras", "trigger", "sync mode", "telemetry")]
     return report

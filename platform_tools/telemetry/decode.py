@@ -60,6 +60,8 @@ MIN_LINE_BYTES = FFC_FRAME_OFFSET + 4
 _U64 = struct.Struct(BYTE_ORDER + "Q")
 _U32 = struct.Struct(BYTE_ORDER + "I")
 LOCATIONS = ("bottom", "top")
+#: where this rig keeps the telemetry rows: boson-config sets it (telemetrySetLocation) when it enables them
+EXPECTED_LOCATION = "bottom"
 
 
 class TelemetryError(ValueError):
@@ -127,7 +129,7 @@ def _check(rows: int, location: str) -> None:
         raise TelemetryError(f"telemetry location {location!r}: expected one of {', '.join(LOCATIONS)}")
 
 
-def split_frame(frame: np.ndarray, rows: int, location: str = "bottom") -> tuple[np.ndarray, bytes]:
+def split_frame(frame: np.ndarray, rows: int, location: str = EXPECTED_LOCATION) -> tuple[np.ndarray, bytes]:
     """(image rows, telemetry line bytes) of a Y16 frame (H x W uint16) with ``rows`` telemetry rows."""
     _check(rows, location)
     if frame.ndim != 2 or frame.shape[0] <= rows:
@@ -138,13 +140,13 @@ def split_frame(frame: np.ndarray, rows: int, location: str = "bottom") -> tuple
     return image, px.tobytes()
 
 
-def decode_frame(frame: np.ndarray, rows: int, location: str = "bottom") -> Telemetry:
+def decode_frame(frame: np.ndarray, rows: int, location: str = EXPECTED_LOCATION) -> Telemetry:
     """Telemetry of a Y16 frame given as an array (H x W uint16)."""
     return decode_line(split_frame(frame, rows, location)[1])
 
 
 def decode_image_data(data: bytes | memoryview, height: int, step: int, rows: int,
-                      location: str = "bottom") -> Telemetry:
+                      location: str = EXPECTED_LOCATION) -> Telemetry:
     """Telemetry from the raw ``data`` of a sensor_msgs/Image (mono16), without building an array."""
     _check(rows, location)
     if height <= rows or step <= 0 or len(data) < height * step:
@@ -154,7 +156,7 @@ def decode_image_data(data: bytes | memoryview, height: int, step: int, rows: in
     return decode_line(bytes(data[first:first + rows * step]))
 
 
-def write_into(frame: np.ndarray, line: bytes, rows: int, location: str = "bottom") -> np.ndarray:
+def write_into(frame: np.ndarray, line: bytes, rows: int, location: str = EXPECTED_LOCATION) -> np.ndarray:
     """A copy of ``frame`` (H x W uint16, telemetry rows included) with ``line`` written into its
     telemetry rows (zero-padded to their size)."""
     _check(rows, location)

@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..boson.commands import FfcStatus
-from .decode import Telemetry, TelemetryError, decode_image_data
+from .decode import EXPECTED_LOCATION, Telemetry, TelemetryError, decode_image_data
 
 OK, WARN, ERROR = 0, 1, 2
 
@@ -40,7 +40,7 @@ class StatusTracker:
     name: str
     hardware_id: str
     rows: int
-    location: str = "bottom"
+    location: str = EXPECTED_LOCATION
     period_s: float = 0.0
     _last: Telemetry | None = field(default=None, init=False)
     _last_pub_ns: int | None = field(default=None, init=False)

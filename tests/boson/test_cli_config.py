@@ -32,14 +32,27 @@ def test_slave_on_both_cameras_then_idempotent(cli, pair):
     assert cams["left"]["serial"] == LEFT and cams["right"]["serial"] == RIGHT
     for cam in cams.values():
         assert cam["status"] == "configured"
-        assert cam["changes"] == [{"setting": "ext_sync_mode", "from": "disable", "to": "slave"}]
-        assert cam["after"] == {"ext_sync_mode": "slave"}
+        # slave mode, and the telemetry rows the FFC status is read from (the rig records them)
+        assert cam["changes"] == [{"setting": "ext_sync_mode", "from": "disable", "to": "slave"},
+                                  {"setting": "telemetry_state", "from": "disabled", "to": "enabled"}]
+        assert cam["after"] == {"ext_sync_mode": "slave", "telemetry_state": "enabled"}
     assert sets(left) == sets(right) == SLAVE
+    for emu in (left, right):   # rows placed where platform_tools.telemetry reads them, before switching on
+        assert emu.state.settings["telemetry_location"] == C.TelemetryLocation.BOTTOM
+        assert emu.state.settings["telemetry_state"] == C.TelemetryState.ENABLED
     assert left.state.flash["ext_sync_mode"] == DISABLE and left.state.flash_writes == 0   # not persisted
     requests = left.requests
     code, doc, _ = config(cli, "--slave")
     assert code == 0 and all(c["status"] == "unchanged" and c["changes"] == [] for c in doc["cameras"])
-    assert left.requests - requests == 2           # read serial and mode only: nothing written
+    assert left.requests - requests == 3           # read serial, sync mode and telemetry: nothing written
+
+
+def test_telemetry_left_alone_when_the_rig_records_none(cli, pair):
+    left, _ = pair
+    code, doc, _ = config(cli, "--slave", "--set", "on_device.thermal_telemetry_rows=0")
+    assert code == 0
+    assert by_label(doc)["left"]["changes"] == [{"setting": "ext_sync_mode", "from": "disable", "to": "slave"}]
+    assert left.state.settings["telemetry_state"] == C.TelemetryState.DISABLED
 
 
 def test_mode_defaults_to_the_rig_description(cli, pair):
@@ -140,8 +153,9 @@ def test_reboot_in_the_middle_of_the_set_command(cli, pair):
 
 def test_reboot_after_apply_loses_ram_and_is_reapplied(cli, pair):
     left, _ = pair
-    # reboot while reading back: RAM reloads from flash (DISABLE); the tool notices and applies again
-    left.faults = parse_faults(f"reboot:fid=0x{C.GET_EXT_SYNC.function_id:08X}:n=4")
+    # reboot while reading back: RAM reloads from flash (DISABLE); the tool notices and applies again.
+    # Request 7 is the read-back: serial, sync mode, telemetry, set sync, telemetry location, set telemetry.
+    left.faults = parse_faults(f"reboot:fid=0x{C.GET_EXT_SYNC.function_id:08X}:n=7")
     code, doc, err = config(cli, "--slave")
     assert code == 0, err
     cam = by_label(doc)["left"]

@@ -79,7 +79,8 @@ def bosons(tmp_path, monkeypatch):
     trigger = Trigger(30.0, running=True)
     emus = {}
     for side, sn in (("left", 93588), ("right", 93589)):
-        state = BosonState(sn, trigger=trigger, settings=dict(FACTORY, ext_sync_mode=2))
+        # as boson-config leaves them: slave mode, telemetry rows on
+        state = BosonState(sn, trigger=trigger, settings=dict(FACTORY, ext_sync_mode=2, telemetry_state=1))
         emus[side] = EmulatedBoson(state, by_id_dir=by_id, boot_s=0.05, seed=sn).start()
     yield emus, trigger
     for e in emus.values():
@@ -115,6 +116,15 @@ def test_doctor_sees_a_wrong_sync_mode(overrides, dev_dir, bosons):
     r, checks = doctor(overrides, dev_dir)
     assert r.returncode == 1
     assert checks["sync mode"]["status"] == "failed" and "right" in checks["sync mode"]["detail"]
+
+
+def test_doctor_sees_telemetry_off(overrides, dev_dir, bosons):
+    emus, _ = bosons
+    emus["left"].state.settings["telemetry_state"] = 0
+    r, checks = doctor(overrides, dev_dir)
+    assert r.returncode == 1
+    assert checks["telemetry"]["status"] == "failed" and "left" in checks["telemetry"]["detail"]
+    assert "FFC status" in checks["telemetry"]["detail"]
 
 
 def test_doctor_sees_a_missing_camera(overrides, dev_dir, bosons):
