@@ -10,58 +10,16 @@ from pathlib import Path
 
 import numpy as np
 
+from cad.render import placed_actor, polydata, vtk_module
+
 HIGHLIGHT = (0.12, 0.47, 0.95)   # blue: nothing else in the rig is blue (PETG orange, copper, black parts)
 FADE = 0.6                       # earlier parts: blended this far towards light grey
-
-
-def _vtk():
-    import vtk
-    vtk.vtkObject.GlobalWarningDisplayOff()
-    return vtk
-
-
-def _poly(vtk, shape, tolerance):
-    from vtk.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
-    verts, tris = shape.tessellate(tolerance, 0.3)
-    pts = vtk.vtkPoints()
-    pts.SetData(numpy_to_vtk(np.array([v.toTuple() for v in verts], dtype=float).reshape(-1, 3), deep=True))
-    t = np.asarray(tris, dtype=np.int64).reshape(-1, 3)
-    cells = vtk.vtkCellArray()
-    conn = np.hstack([np.full((len(t), 1), 3, dtype=np.int64), t]).ravel()
-    cells.SetCells(len(t), numpy_to_vtkIdTypeArray(conn, deep=True))
-    poly = vtk.vtkPolyData()
-    poly.SetPoints(pts)
-    poly.SetPolys(cells)
-    normals = vtk.vtkPolyDataNormals()
-    normals.SetInputData(poly)
-    normals.SetFeatureAngle(35)
-    normals.Update()
-    return normals.GetOutput()
-
-
-def _actor(vtk, poly, colour, pose, opacity=1.0):
-    mapper = vtk.vtkPolyDataMapper()
-    mapper.SetInputData(poly)
-    actor = vtk.vtkActor()
-    actor.SetMapper(mapper)
-    prop = actor.GetProperty()
-    prop.SetColor(*colour[:3])
-    prop.SetOpacity(opacity)
-    prop.SetAmbient(0.25)
-    prop.SetDiffuse(0.75)
-    m = vtk.vtkMatrix4x4()
-    M = pose.matrix()
-    for i in range(4):
-        for j in range(4):
-            m.SetElement(i, j, float(M[i, j]))
-    actor.SetUserMatrix(m)
-    return actor
 
 
 def render_steps(asm, steps, folder: Path, *, size=(960, 640), tolerance: float = 0.25) -> list[Path]:
     """One PNG per step (``step_NN.png``): nodes so far in the exploded view, the new ones highlighted."""
     from cad.export import exploded_poses
-    vtk = _vtk()
+    vtk = vtk_module()
     folder.mkdir(parents=True, exist_ok=True)
     exploded = exploded_poses(asm)
     nodes = {n.name: n for n in asm.nodes}
@@ -78,13 +36,13 @@ def render_steps(asm, steps, folder: Path, *, size=(960, 640), tolerance: float 
             n = nodes[name]
             key = id(n.spec)
             if key not in meshes:
-                meshes[key] = _poly(vtk, n.local_shape(asm.cache), tolerance)
+                meshes[key] = polydata(vtk, n.local_shape(asm.cache), tolerance)
             if name in new:
                 colour, opacity = HIGHLIGHT, 1.0
             else:
                 c = np.asarray(n.colour[:3])
                 colour, opacity = tuple(c * (1 - FADE) + np.array([0.85, 0.86, 0.88]) * FADE), 0.55
-            ren.AddActor(_actor(vtk, meshes[key], colour, exploded[name], opacity))
+            ren.AddActor(placed_actor(vtk, meshes[key], colour, exploded[name], opacity))
         done.extend(st.nodes)
         win = vtk.vtkRenderWindow()
         win.SetOffScreenRendering(1)

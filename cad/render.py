@@ -6,20 +6,21 @@ from pathlib import Path
 import numpy as np
 
 from .assembly import Assembly
-from .geom import moved
 
 
-def _vtk():
+def vtk_module():
+    """VTK, quiet: the X11 probe warns before VTK falls back to EGL."""
     import vtk
-    vtk.vtkObject.GlobalWarningDisplayOff()   # the X11 probe warns before VTK falls back to EGL
+    vtk.vtkObject.GlobalWarningDisplayOff()
     return vtk
 
 
-def _actor(vtk, shape, colour, tolerance):
+def polydata(vtk, shape, tolerance: float):
+    """A CadQuery shape as VTK triangles with smoothed normals (sharp edges kept past 35 deg)."""
     from vtk.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
     verts, tris = shape.tessellate(tolerance, 0.3)
     pts = vtk.vtkPoints()
-    pts.SetData(numpy_to_vtk(np.array([v.toTuple() for v in verts], dtype=float), deep=True))
+    pts.SetData(numpy_to_vtk(np.array([v.toTuple() for v in verts], dtype=float).reshape(-1, 3), deep=True))
     t = np.asarray(tris, dtype=np.int64).reshape(-1, 3)
     cells = vtk.vtkCellArray()
     conn = np.hstack([np.full((len(t), 1), 3, dtype=np.int64), t]).ravel()
@@ -27,33 +28,36 @@ def _actor(vtk, shape, colour, tolerance):
     poly = vtk.vtkPolyData()
     poly.SetPoints(pts)
     poly.SetPolys(cells)
+    normals = vtk.vtkPolyDataNormals()
+    normals.SetInputData(poly)
+    normals.SetFeatureAngle(35)
+    normals.Update()
+    return normals.GetOutput()
+
+
+def placed_actor(vtk, poly, colour, pose, opacity: float = 1.0):
+    """An actor drawing ``poly`` at ``pose`` (a Pose in the rig frame)."""
     mapper = vtk.vtkPolyDataMapper()
     mapper.SetInputData(poly)
     actor = vtk.vtkActor()
     actor.SetMapper(mapper)
-    actor.GetProperty().SetColor(*colour[:3])
-    actor.GetProperty().SetInterpolationToFlat()
-    return actor
-
-
-def _placed(vtk, poly, colour, pose):
-    mapper = vtk.vtkPolyDataMapper()
-    mapper.SetInputData(poly)
-    actor = vtk.vtkActor()
-    actor.SetMapper(mapper)
-    actor.GetProperty().SetColor(*colour[:3])
+    prop = actor.GetProperty()
+    prop.SetColor(*colour[:3])
+    prop.SetOpacity(opacity)
+    prop.SetAmbient(0.25)
+    prop.SetDiffuse(0.75)
     m = vtk.vtkMatrix4x4()
     M = pose.matrix()
-    for i in range(4):
-        for j in range(4):
-            m.SetElement(i, j, float(M[i, j]))
+    for r in range(4):
+        for c in range(4):
+            m.SetElement(r, c, float(M[r, c]))
     actor.SetUserMatrix(m)
     return actor
 
 
 def render_views(asm: Assembly, folder: Path, views: dict, exploded: dict, tolerance: float,
                  size=(1200, 900)) -> list[Path]:
-    vtk = _vtk()
+    vtk = vtk_module()
     out = []
     meshes: dict = {}
     for view, (direction, explode) in views.items():
@@ -63,8 +67,8 @@ def render_views(asm: Assembly, folder: Path, views: dict, exploded: dict, toler
             pose = exploded[n.name] if explode else n.pose
             key = id(n.spec)
             if key not in meshes:
-                meshes[key] = _actor(vtk, n.local_shape(asm.cache), n.colour, tolerance).GetMapper().GetInput()
-            ren.AddActor(_placed(vtk, meshes[key], n.colour, pose))
+                meshes[key] = polydata(vtk, n.local_shape(asm.cache), tolerance)
+            ren.AddActor(placed_actor(vtk, meshes[key], n.colour, pose))
         win = vtk.vtkRenderWindow()
         win.SetOffScreenRendering(1)
         win.AddRenderer(ren)
