@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from ._fast import ring_kernel
 from .refine import image_noise
 
 RING_SAMPLES = 32
@@ -77,7 +78,28 @@ def local_maxima(S: np.ndarray, threshold: float, radius: int = 2) -> np.ndarray
 
 def ring_check(g: np.ndarray, xy: np.ndarray, radius) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Ring test at ``radius`` (a number, or one per point): (ok, dirs (n,2), strength, sign) for
-    each point (vectorised)."""
+    each point. The rings are sampled by cv2.remap, the tests run in numba (_fast.ring_kernel);
+    ``_ring_check_numpy`` is the same test in numpy (the reference the tests compare with)."""
+    n = len(xy)
+    dirs = np.zeros((n, 2))
+    strength = np.zeros(n)
+    sign = np.zeros(n)
+    ok = np.zeros(n, bool)
+    if n == 0:
+        return ok, dirs, strength, sign
+    ang = np.arange(RING_SAMPLES) * (2 * np.pi / RING_SAMPLES)
+    r = np.broadcast_to(np.asarray(radius, float), (n,))[:, None]
+    px = xy[:, 0:1] + r * np.cos(ang)[None, :]
+    py = xy[:, 1:2] + r * np.sin(ang)[None, :]
+    H, W = g.shape
+    inside = (px.min(1) >= 0) & (py.min(1) >= 0) & (px.max(1) <= W - 1) & (py.max(1) <= H - 1)
+    vals = np.ascontiguousarray(sample(g, px, py), dtype=np.float32)
+    ring_kernel(vals, inside, ok, dirs, strength, sign)
+    return ok, dirs, strength, sign
+
+
+def _ring_check_numpy(g: np.ndarray, xy: np.ndarray, radius) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """ring_check in plain numpy (vectorised): the reference for _fast.ring_kernel."""
     n = len(xy)
     N = RING_SAMPLES
     dirs = np.zeros((n, 2))

@@ -1,6 +1,7 @@
 """detect_corners(image, board=(W, H)): the heated-checkerboard detector, end to end."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -92,10 +93,10 @@ def detect_corners(image: np.ndarray, board: tuple[int, int] = (10, 7)) -> Detec
     if ij is None:
         return _empty((W, H), why, len(cands.xy))
     # spacing to the nearest grid neighbour, for window sizes
-    pos = {tuple(k): p for k, p in zip(ij.tolist(), xy)}
-    spacing = np.array([min([np.linalg.norm(pos[n] - p) for n in
+    pos = {tuple(k): p for k, p in zip(ij.tolist(), xy.tolist())}
+    spacing = np.array([min([math.sqrt((pos[n][0] - p[0]) ** 2 + (pos[n][1] - p[1]) ** 2) for n in
                              ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)) if n in pos] or [8.0])
-                        for (i, j), p in zip(ij.tolist(), xy)])
+                        for (i, j), p in zip(ij.tolist(), xy.tolist())])
     fine = refine(f, xy, spacing)
     fine[lattice_outliers(fine, ij)] = np.nan
     ok = np.isfinite(fine[:, 0])

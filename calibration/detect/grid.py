@@ -23,6 +23,7 @@ import numpy as np
 from scipy.ndimage import map_coordinates
 from scipy.spatial import cKDTree
 
+from ._fast import link_kernel
 from .candidates import Candidates
 
 ANGLE_TOL = np.radians(20.0)
@@ -47,7 +48,20 @@ def _angle_diff_mod_pi(a, b):
 
 
 def link(c: Candidates) -> np.ndarray:
-    """slots[p, line, side] = neighbour index or -1; side 0 is +direction of the line."""
+    """slots[p, line, side] = neighbour index or -1; side 0 is +direction of the line (numba:
+    _fast.link_kernel; ``_link_python`` is the reference)."""
+    n = len(c.xy)
+    if n < 2:
+        return -np.ones((n, 2, 2), dtype=int)
+    k = min(K_NEIGHBOURS + 1, n)
+    dist, nb = cKDTree(c.xy).query(c.xy, k=k)
+    return link_kernel(np.ascontiguousarray(c.xy, float), np.ascontiguousarray(c.dirs, float),
+                       np.ascontiguousarray(dist, float), np.ascontiguousarray(nb, np.int64),
+                       float(ANGLE_TOL), float(LINE_AGREE_TOL), float(SPACING_RATIO))
+
+
+def _link_python(c: Candidates) -> np.ndarray:
+    """link in numpy and Python loops: the reference for _fast.link_kernel."""
     n = len(c.xy)
     slots = -np.ones((n, 2, 2), dtype=int)
     if n < 2:
@@ -89,7 +103,8 @@ def link(c: Candidates) -> np.ndarray:
                 s = 0 if a > b else 1
                 q = slots[p, L, s]
                 slots[p, L, s] = -1
-                slots[q][slots[q] == p] = -1
+                if q >= 0:
+                    slots[q][slots[q] == p] = -1
     return slots
 
 
@@ -99,8 +114,9 @@ def label(c: Candidates, slots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     degree = (slots >= 0).sum(axis=(1, 2))
     seen = np.zeros(n, bool)
     best_idx, best_ij = np.zeros(0, int), np.zeros((0, 2), int)
-    unit = np.stack([np.cos(c.dirs), np.sin(c.dirs)], axis=-1)       # (n, 2 lines, 2)
-    for seed in np.argsort(-degree):
+    unit = np.stack([np.cos(c.dirs), np.sin(c.dirs)], axis=-1).tolist()   # (n, 2 lines, 2)
+    sl = slots.tolist()                    # plain lists: the walk touches each a few times
+    for seed in np.argsort(-degree).tolist():
         if seen[seed] or degree[seed] == 0:
             continue
         # axis_of[p, L] = global axis (0 i, 1 j) of line L; orient[p, L] = +1/-1
@@ -114,7 +130,7 @@ def label(c: Candidates, slots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             p = queue.popleft()
             for L in (0, 1):
                 for s in (0, 1):
-                    q = slots[p, L, s]
+                    q = sl[p][L][s]
                     if q < 0:
                         continue
                     A = axis_of[p][L]
@@ -127,8 +143,8 @@ def label(c: Candidates, slots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                             conflict.add(q)
                         continue
                     # orientation at q: the line through p is L2, its side towards p is s2
-                    where = np.argwhere(slots[q] == p)
-                    if len(where) == 0:
+                    where = [(a, b) for a in (0, 1) for b in (0, 1) if sl[q][a][b] == p]
+                    if not where:
                         continue
                     L2, s2 = where[0]
                     ax = [0, 0]
@@ -138,9 +154,11 @@ def label(c: Candidates, slots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                     # the other line: orient along p's direction of the other axis
                     B = 1 - A
                     LB = axis_of[p].index(B)
-                    vB = orient[p][LB] * unit[p, LB]
+                    o = orient[p][LB]
+                    vB = (o * unit[p][LB][0], o * unit[p][LB][1])
+                    uq = unit[q][1 - L2]
                     ax[1 - L2] = B
-                    ori[1 - L2] = 1 if float(unit[q, 1 - L2] @ vB) >= 0 else -1
+                    ori[1 - L2] = 1 if uq[0] * vB[0] + uq[1] * vB[1] >= 0 else -1
                     axis_of[q], orient[q], lab[q] = tuple(ax), tuple(ori), new
                     seen[q] = True
                     queue.append(q)

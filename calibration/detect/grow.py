@@ -12,19 +12,26 @@ gets a second, better-informed look:
   v (+j) come with it;
 * search: the strongest saddle response within 0.3 of the smaller step of the prediction;
 * check (no ring test: at steep tilts its line angles are biased by 15-20 deg): the saddle
-  response at least 0.2 of the grid's median; the four quarter-squares around the point (9
-  samples each, laid out along the predicted u and v) alternating with a checker amplitude of at
+  response at least 0.2 of the grid's median (0.1 inside the grid's bounding box); the four
+  quarter-squares around the point (9 samples each, laid out along the predicted u and v)
+  alternating with a checker amplitude of at
   least 0.3 of the grid's, the right checker parity, and no square weaker than 0.4 of the
   amplitude (a point past the board's last corner line has its border and the background on one
   side); the samples inside the image; a point starting a new row or column counts only if at
-  least two and most of that line pass together.
+  least two and most of that line pass together, and not where the board visibly ends (the
+  squares past the grid's last line alternate and the next ones do not) once the grid would be
+  larger than the board's shorter side: that line is the board's border (a framed board's rim
+  passes the square checks).
 The seed grid's corners go through the same quarter-square check first (the board's rim linked in).
 
 ``lattice_outliers`` checks every corner of the final grid against its neighbours after
-sub-pixel refinement: a corner that drifted, a label with too little support, or two labels at
-one image position are dropped, never reported.
+sub-pixel refinement: a corner that drifted (more than 0.2 of the local step from where its
+neighbours put it), a label with too little support, or two labels at one image position are
+dropped, never reported.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -35,7 +42,7 @@ MAX_ROUNDS = 40
 WEAKEST_SQUARE = 0.4             # each square at least this share of the checker amplitude
 MIN_SADDLE = 0.2                 # saddle response at least this share of the grid's median
 WEAKEST_INNER = 0.2             # ... for a point inside the grid's bounding box
-MIN_SADDLE_INNER = 0.2
+MIN_SADDLE_INNER = 0.1           # (0.2 lost the far, faint end of steep boards)
 SEARCH_R = 6                     # largest search radius, pixels
 
 
@@ -50,14 +57,15 @@ def _median(vals: list) -> float:
     return v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
 
 
-def _mean(vecs: list) -> np.ndarray:
-    return np.array([sum(v[0] for v in vecs) / len(vecs), sum(v[1] for v in vecs) / len(vecs)])
+def _mean(vecs: list) -> tuple[float, float]:
+    return sum(v[0] for v in vecs) / len(vecs), sum(v[1] for v in vecs) / len(vecs)
 
 
 def predict(pos: dict, t: tuple[int, int]):
     """(position, u, v, n_predictions) of lattice point ``t`` from the labelled points in ``pos``
-    ((x, y) per (i, j); t itself is not used); None without a prediction or a step along either
-    axis. Plain Python on tuples: this runs a few thousand times per image."""
+    ((x, y) per (i, j); t itself is not used), the first three (x, y) tuples; None without a
+    prediction or a step along either axis. Plain Python on tuples: this runs a few thousand times
+    per image (numba would pay more to build a typed dict than it saves)."""
     i, j = t
     px, py, us, vs = [], [], [], []
     for di, dj in NEIGH:
@@ -103,7 +111,7 @@ def predict(pos: dict, t: tuple[int, int]):
                     out.append((pa[0] - pos[pk][0], pa[1] - pos[pk][1]))
     if not px or not us or not vs:
         return None
-    return np.array([_median(px), _median(py)]), _mean(us), _mean(vs), len(px)
+    return (_median(px), _median(py)), _mean(us), _mean(vs), len(px)
 
 
 _OFF = np.array([0.2, 0.325, 0.45])
@@ -240,6 +248,11 @@ def grow(g: np.ndarray, S: np.ndarray, xy: np.ndarray, ij: np.ndarray, strength:
                 n_ok = int(np.sum(ok & grp))
                 if n_ok < 2 or n_ok < 0.5 * int(grp.sum()):
                     ok &= ~grp
+                elif (i1 - i0, j1 - j0)[axis] + 2 > min(board) and _board_ends(g, pos, axis, val > (i1, j1)[axis]):
+                    # the new line would make the grid larger than the board's shorter side, and the
+                    # board visibly ends right there (its outer squares alternate, then nothing):
+                    # the line is the board's border, not corners
+                    ok &= ~grp
         if not ok.any():
             continue
         fresh = list(map(tuple, T[ok].tolist()))
@@ -253,7 +266,18 @@ def grow(g: np.ndarray, S: np.ndarray, xy: np.ndarray, ij: np.ndarray, strength:
     return new_xy, new_ij, added
 
 
-def lattice_outliers(xy: np.ndarray, ij: np.ndarray, tol: float = 0.3) -> np.ndarray:
+def _board_ends(g: np.ndarray, pos: dict, axis: int, high: bool) -> bool:
+    """True if the board visibly ends past the grid's last lattice line at the high (or low) end
+    of ``axis`` (grid._end_state: the squares just past it alternate, the next ones do not)."""
+    from .grid import _end_state
+    keys = np.array(list(pos))
+    k0 = keys.min(0)
+    p = {(int(i - k0[0]), int(j - k0[1])): np.asarray(v) for (i, j), v in pos.items()}
+    n_other = int(keys[:, 1 - axis].max() - k0[1 - axis]) + 1
+    return _end_state(g, p, axis, 1 if high else 0, n_other).startswith("closed")
+
+
+def lattice_outliers(xy: np.ndarray, ij: np.ndarray, tol: float = 0.2) -> np.ndarray:
     """Mask of corners farther than ``tol`` x the local step from where their labelled neighbours
     put them, of corners with fewer than two neighbour predictions (nothing vouches for their
     label), and of pairs of labels at (nearly) one image position (one of them is mislabelled:
@@ -267,21 +291,24 @@ def lattice_outliers(xy: np.ndarray, ij: np.ndarray, tol: float = 0.3) -> np.nda
         step = np.median(d[:, 1])
         bad[fin[d[:, 1] < 0.4 * step]] = True
     keys = list(map(tuple, ij.tolist()))
+    pts = [tuple(p) for p in xy.tolist()]
+    fin = [math.isfinite(p[0]) for p in pts]
+    bad = bad.tolist()
     for _ in range(len(xy)):
-        pos = {k: p for k, p, b in zip(keys, xy, bad) if np.isfinite(p[0]) and not b}
-        new = bad.copy()
-        for n, (k, p) in enumerate(zip(keys, xy)):
-            if bad[n] or not np.isfinite(p[0]):
+        pos = {k: p for k, p, b, f in zip(keys, pts, bad, fin) if f and not b}
+        new = list(bad)
+        for n, (k, p) in enumerate(zip(keys, pts)):
+            if bad[n] or not fin[n]:
                 continue
             r = predict(pos, k)
             if r is None or r[3] < 2:
                 new[n] = True             # too little support to vouch for its label
                 continue
             q, u, v, _ = r
-            step = min(np.linalg.norm(u), np.linalg.norm(v))
-            if np.linalg.norm(p - q) > tol * step:
+            step = min(math.sqrt(u[0] * u[0] + u[1] * u[1]), math.sqrt(v[0] * v[0] + v[1] * v[1]))
+            if math.sqrt((p[0] - q[0]) ** 2 + (p[1] - q[1]) ** 2) > tol * step:
                 new[n] = True
-        if (new == bad).all():
+        if new == bad:
             break
         bad = new
-    return bad
+    return np.array(bad, bool)

@@ -57,10 +57,11 @@ def refine(f: np.ndarray, xy: np.ndarray, spacing: np.ndarray) -> np.ndarray:
         pts = cv2.cornerSubPix(g, pts, (int(h), int(h)), (-1, -1), crit)
         out[sel] = pts.reshape(-1, 2)
     out = out.astype(np.float64)
-    sad = saddle_fit(f, out)
+    gs = cv2.GaussianBlur(f, (0, 0), SADDLE_BLUR)         # one blur for both fits
+    sad = saddle_fit(f, out, blurred=gs)
     # the fit from the unrefined position too: cornerSubPix can wander to the next saddle on a
     # steep, faint board; two fits that end apart mean the corner is not well defined (dropped)
-    sad0 = saddle_fit(f, np.asarray(xy, float), iters=SADDLE_ITERS + 2)
+    sad0 = saddle_fit(f, np.asarray(xy, float), iters=SADDLE_ITERS + 2, blurred=gs)
     with np.errstate(invalid="ignore"):
         apart = np.linalg.norm(sad - sad0, axis=1) > SADDLE_AGREE
     sad = np.where(np.isfinite(sad0) & ~np.isfinite(sad), sad0, sad)
@@ -85,10 +86,11 @@ def _saddle_operator(r: int):
 
 
 def saddle_fit(f: np.ndarray, xy: np.ndarray, blur: float = SADDLE_BLUR, r: int = SADDLE_R,
-               iters: int = SADDLE_ITERS) -> np.ndarray:
+               iters: int = SADDLE_ITERS, blurred: np.ndarray | None = None) -> np.ndarray:
     """Saddle point of a weighted quadratic fit around each point of ``xy`` on ``f`` blurred by
-    ``blur``; NaN where the fit is not a saddle, runs off the image or moves more than 1.5 px a step."""
-    g = cv2.GaussianBlur(f, (0, 0), blur)
+    ``blur`` (or on ``blurred``, that image already blurred); NaN where the fit is not a saddle,
+    runs off the image or moves more than 1.5 px a step."""
+    g = cv2.GaussianBlur(f, (0, 0), blur) if blurred is None else blurred
     ox, oy, w, P = _saddle_operator(r)
     out = np.array(xy, float)
     H, W = f.shape

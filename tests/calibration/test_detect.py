@@ -335,3 +335,58 @@ def test_faint_last_squares_inside_the_image_are_not_taken_for_the_board_edge():
     xy = 40 + step * ij.astype(float)
     out, why = anchor(g, xy, ij, W, H)
     assert out is None or np.array_equal(out, ij), why
+
+
+def test_numba_kernels_agree_with_the_reference_code(synth_set):
+    """The ring test and the linking run in numba (_fast.py); the numpy/Python versions they
+    replaced are kept as references: same candidates, same line angles (to rounding), same links."""
+    from calibration.detect import candidates as C
+    from calibration.detect.detector import to_float
+    from calibration.detect.grid import _link_python, link
+    from calibration.detect.refine import image_noise
+    folder = synth_set("hard", n=8, seed=3)
+    truth, _ = truth_of(folder)
+    for im in truth["images"][:3]:
+        f = C.normalise(to_float(image(folder, im["file"])))
+        noise = image_noise(f)
+        cands, g, S, _ = C.find_candidates(f, noise=noise)
+        xy = C.local_maxima(S, threshold=0.002)
+        for r in (3.0, 5.0):
+            ok, dirs, strength, sign = C.ring_check(g, xy, r)
+            ok0, dirs0, strength0, sign0 = C._ring_check_numpy(g, xy, r)
+            assert np.array_equal(ok, ok0) and ok.sum() > 20
+            np.testing.assert_allclose(dirs[ok], dirs0[ok], atol=1e-9)
+            np.testing.assert_allclose(strength[ok], strength0[ok], rtol=1e-12)
+            assert np.array_equal(sign[ok], sign0[ok])
+        assert np.array_equal(link(cands), _link_python(cands))
+
+
+def test_growth_stops_where_the_board_visibly_ends():
+    """grow._board_ends sees the board end past its last corner lines (the squares there alternate,
+    the ones past them do not) and not past a line inside the board. The growth uses it to refuse a
+    lattice line on the board's border that would make the grid larger than the board (on the
+    bench's real 7x7 set, a framed board near the image edge grew an eighth row there and was then
+    refused as 8x7); a grid short of the board's end still grows to it, and no further."""
+    from calibration.detect.grow import _board_ends, grow
+    from calibration.detect.candidates import saddle_response
+    W, H, step = 7, 7, 20.0
+    size = 260
+    yy, xx = np.mgrid[0:size, 0:size].astype(float)
+    u, v = (xx - 40) / step, (yy - 40) / step
+    on = (u > -1) & (u < W) & (v > -1) & (v < H)
+    chk = np.where((np.floor(u) + np.floor(v)) % 2 == 0, 1.0, -1.0)
+    g = cv2.GaussianBlur(np.where(on, chk, 0.0).astype(np.float32), (0, 0), 1.0)
+    jj, ii = np.mgrid[0:H, 0:W]
+    ij = np.stack([ii.ravel(), jj.ravel()], 1)
+    xy = 40 + step * ij.astype(float)
+    pos = {tuple(k): tuple(p) for k, p in zip(ij.tolist(), xy.tolist())}
+    assert _board_ends(g, pos, 1, True) and _board_ends(g, pos, 0, False)
+    short = {k: p for k, p in pos.items() if k[1] < H - 2}
+    assert not _board_ends(g, short, 1, True)
+    S = saddle_response(g)
+    strength = np.ones(len(xy))
+    new_xy, new_ij, _ = grow(g, S, xy, ij, strength, (W, H))
+    assert np.ptp(new_ij, axis=0).max() + 1 <= 7
+    keep = ij[:, 1] < H - 2
+    new_xy, new_ij, _ = grow(g, S, xy[keep], ij[keep], strength[keep], (W, H))
+    assert len(new_xy) == W * H and np.ptp(new_ij, axis=0).max() + 1 == 7
