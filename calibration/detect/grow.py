@@ -43,6 +43,7 @@ WEAKEST_SQUARE = 0.4             # each square at least this share of the checke
 MIN_SADDLE = 0.2                 # saddle response at least this share of the grid's median
 WEAKEST_INNER = 0.2             # ... for a point inside the grid's bounding box
 MIN_SADDLE_INNER = 0.1           # (0.2 lost the far, faint end of steep boards)
+SEED_TOL = 0.35                  # seed labels farther than this x the step from their neighbours' lattice
 SEARCH_R = 6                     # largest search radius, pixels
 
 
@@ -141,6 +142,12 @@ def grow(g: np.ndarray, S: np.ndarray, xy: np.ndarray, ij: np.ndarray, strength:
     """Add the missing corners next to the labelled grid (xy, ij). Returns (xy, ij, added mask).
     The grid never grows past max(W, H) + 1 lattice steps along either axis."""
     Hh, Ww = g.shape
+    # labels the linking got wrong (a link to a diagonal or next-but-one corner on a steep,
+    # foreshortened board shifts every label behind it) sit far from where their neighbours put
+    # them; growing from them spreads the shift, so they go first (growth finds the true ones)
+    bad = lattice_outliers(np.asarray(xy, float), ij, SEED_TOL)
+    if int(np.sum(~bad)) >= 4:
+        xy, ij = xy[~bad], ij[~bad]
     pos = {tuple(k): (float(p[0]), float(p[1])) for k, p in zip(ij.tolist(), xy)}
     lim = max(board) + 1
     # the grid's checker parity and contrast, from the seed corners; seed corners whose squares do

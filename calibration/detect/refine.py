@@ -4,8 +4,8 @@ Positions: OpenCV's cornerSubPix (every gradient in a window around an X-corner 
 the vector from the corner: unbiased for straight edges at any angle, so for tilted boards too) on
 a lightly smoothed copy of the destriped image, with a window sized from the local corner spacing;
 then the saddle point of a local quadratic fit (``saddle_fit``, see below), from both the
-cornerSubPix and the unrefined position: a corner whose two fits end more than 0.3 px apart is
-dropped.
+cornerSubPix and the unrefined (grid) position: where cornerSubPix was pulled off (no saddle at
+its result, or the two fits more than 0.3 px apart) the fit from the grid position is kept.
 
 Trust: a corner's position noise grows with image noise over local contrast. ``level`` follows
 mrcal's corners file: 0 for full trust, n for 2^n times the noise; ``weight`` = 2^-level.
@@ -30,7 +30,7 @@ REFINE_MAX_HALF = 10
 SADDLE_BLUR = 1.5
 SADDLE_R = 3
 SADDLE_ITERS = 3
-SADDLE_AGREE = 0.3     # px: the fits from the found and the cornerSubPix position must agree
+SADDLE_AGREE = 0.3     # px: fits further apart mean cornerSubPix was pulled off: the grid-position fit is kept
 SADDLE_DISAGREE = 2.0   # px between cornerSubPix's and the fit's estimates: an unreliable corner, dropped
 CNR_FULL = 40.0       # contrast / noise at which a corner counts as level 0
 MAX_LEVEL = 4
@@ -64,9 +64,12 @@ def refine(f: np.ndarray, xy: np.ndarray, spacing: np.ndarray) -> np.ndarray:
     sad0 = saddle_fit(f, np.asarray(xy, float), iters=SADDLE_ITERS + 2, blurred=gs)
     with np.errstate(invalid="ignore"):
         apart = np.linalg.norm(sad - sad0, axis=1) > SADDLE_AGREE
-    sad = np.where(np.isfinite(sad0) & ~np.isfinite(sad), sad0, sad)
-    sad[apart] = np.nan
-    out[apart] = np.nan
+    # cornerSubPix pulled off (its window holds the neighbouring corners of a small or steep
+    # board: it lands where the fit finds no saddle, or at another one): the fit from the grid's
+    # own position stands, and cornerSubPix's estimate is not held against it (lattice check follows)
+    from0 = np.isfinite(sad0[:, 0]) & (~np.isfinite(sad[:, 0]) | apart)
+    sad[from0] = sad0[from0]
+    out[from0] = sad0[from0]
     with np.errstate(invalid="ignore"):
         disagree = np.linalg.norm(sad - out, axis=1) > SADDLE_DISAGREE
     out = np.where(disagree[:, None], np.nan, np.where(np.isfinite(sad), sad, out))
