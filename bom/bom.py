@@ -16,6 +16,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from platform_tools.problems import InputProblems
+
 from .catalogue import LoadedCatalogue
 from .catalogue_schema import Category, CatalogueEntry
 
@@ -25,10 +27,8 @@ CATEGORY_ORDER = [c.value for c in (Category.SENSORS, Category.COMPUTE, Category
                                     Category.CONSUMABLES)]
 
 
-class BomError(Exception):
-    def __init__(self, lines: list[str]):
-        self.lines = lines
-        super().__init__("\n".join(lines))
+class BomError(InputProblems):
+    """The assembly and the catalogue do not join: one line per problem."""
 
 
 @dataclass

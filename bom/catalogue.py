@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator
 
+from platform_tools.problems import InputProblems
 from platform_tools.rig import Rig
 from platform_tools.rig.typed import Problem, closest, convert
 from platform_tools.rig.yamlsource import YamlSource, YamlSourceError, load_yaml_file
@@ -18,10 +19,8 @@ from .catalogue_schema import Catalogue, CatalogueEntry
 DEFAULT_CATALOGUE = Path(__file__).resolve().parent / "parts.yaml"
 
 
-class CatalogueError(Exception):
-    def __init__(self, lines: list[str]):
-        self.lines = lines
-        super().__init__("\n".join(lines))
+class CatalogueError(InputProblems):
+    """bom/parts.yaml is not valid: one line per problem."""
 
 
 @dataclass(frozen=True)

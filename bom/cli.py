@@ -25,28 +25,17 @@ def _inputs(args, *, guide: bool):
     from cad.cache import ShapeCache
     from cad.design import DesignError
 
-    from .bom import BomError, build_bom
-    from .catalogue import CatalogueError, load_catalogue
-    from .guide import GuideError, load_guide
+    from .bom import build_bom
+    from .catalogue import load_catalogue
+    from .guide import load_guide
     rig = rig_from_args(args)
-    try:
-        cat = load_catalogue(rig, args.catalogue)
-    except CatalogueError as exc:
-        raise UserError("\n".join(exc.lines)) from None
+    cat = load_catalogue(rig, args.catalogue)   # bad input (InputProblems) is printed by run(), exit 2
     try:
         asm = build(rig, ShapeCache(enabled=not args.no_cache))
     except DesignError as exc:
         raise UserError("the design cannot be built from these values:\n" + "\n".join(str(p) for p in exc.problems)) from None
-    try:
-        bom = build_bom(asm, cat)
-    except BomError as exc:
-        raise UserError("\n".join(exc.lines)) from None
-    g = None
-    if guide:
-        try:
-            g = load_guide(asm, bom, args.steps)
-        except GuideError as exc:
-            raise UserError("\n".join(exc.lines)) from None
+    bom = build_bom(asm, cat)
+    g = load_guide(asm, bom, args.steps) if guide else None
     return asm, bom, g
 
 

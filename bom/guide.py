@@ -19,6 +19,7 @@ from typing import Annotated, Literal, Mapping, Optional
 import jinja2
 
 from platform_tools.rig.typed import Gt, closest, convert
+from platform_tools.problems import InputProblems
 from platform_tools.rig.yamlsource import YamlSourceError, load_yaml_file
 
 from .bom import Bom, Line
@@ -26,10 +27,8 @@ from .bom import Bom, Line
 DEFAULT_STEPS = Path(__file__).resolve().parents[1] / "docs" / "assembly" / "steps.yaml"
 
 
-class GuideError(Exception):
-    def __init__(self, lines: list[str]):
-        self.lines = lines
-        super().__init__("\n".join(lines))
+class GuideError(InputProblems):
+    """docs/assembly/steps.yaml is not valid for this assembly: one line per problem."""
 
 
 @dataclass(frozen=True)

@@ -80,41 +80,41 @@ def ring_check(g: np.ndarray, xy: np.ndarray, radius) -> tuple[np.ndarray, np.nd
     """Ring test at ``radius`` (a number, or one per point): (ok, dirs (n,2), strength, sign) for
     each point. The rings are sampled by cv2.remap, the tests run in numba (_fast.ring_kernel);
     ``_ring_check_numpy`` is the same test in numpy (the reference the tests compare with)."""
-    n = len(xy)
-    dirs = np.zeros((n, 2))
-    strength = np.zeros(n)
-    sign = np.zeros(n)
-    ok = np.zeros(n, bool)
-    if n == 0:
+    ok, dirs, strength, sign = _ring_outputs(len(xy))
+    if len(xy) == 0:
         return ok, dirs, strength, sign
+    vals, inside = _ring_samples(g, xy, radius)
+    ring_kernel(np.ascontiguousarray(vals, dtype=np.float32), inside, ok, dirs, strength, sign)
+    return ok, dirs, strength, sign
+
+
+def _ring_outputs(n: int):
+    """Empty results of the ring test for ``n`` points: ok, dirs, strength, sign."""
+    return np.zeros(n, bool), np.zeros((n, 2)), np.zeros(n), np.zeros(n)
+
+
+def _ring_samples(g: np.ndarray, xy: np.ndarray, radius):
+    """Image values on a ring of RING_SAMPLES points around each point (cv2.remap), and whether the
+    whole ring lies inside the image."""
+    n = len(xy)
     ang = np.arange(RING_SAMPLES) * (2 * np.pi / RING_SAMPLES)
     r = np.broadcast_to(np.asarray(radius, float), (n,))[:, None]
     px = xy[:, 0:1] + r * np.cos(ang)[None, :]
     py = xy[:, 1:2] + r * np.sin(ang)[None, :]
     H, W = g.shape
     inside = (px.min(1) >= 0) & (py.min(1) >= 0) & (px.max(1) <= W - 1) & (py.max(1) <= H - 1)
-    vals = np.ascontiguousarray(sample(g, px, py), dtype=np.float32)
-    ring_kernel(vals, inside, ok, dirs, strength, sign)
-    return ok, dirs, strength, sign
+    return sample(g, px, py), inside
 
 
 def _ring_check_numpy(g: np.ndarray, xy: np.ndarray, radius) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """ring_check in plain numpy (vectorised): the reference for _fast.ring_kernel."""
     n = len(xy)
     N = RING_SAMPLES
-    dirs = np.zeros((n, 2))
-    strength = np.zeros(n)
-    sign = np.zeros(n)
-    ok = np.zeros(n, bool)
+    ok, dirs, strength, sign = _ring_outputs(n)
     if n == 0:
         return ok, dirs, strength, sign
-    ang = np.arange(N) * (2 * np.pi / N)
-    r = np.broadcast_to(np.asarray(radius, float), (n,))[:, None]
-    px = xy[:, 0:1] + r * np.cos(ang)[None, :]
-    py = xy[:, 1:2] + r * np.sin(ang)[None, :]
-    H, W = g.shape
-    inside = (px.min(1) >= 0) & (py.min(1) >= 0) & (px.max(1) <= W - 1) & (py.max(1) <= H - 1)
-    vals = sample(g, px, py).astype(np.float64)
+    vals, inside = _ring_samples(g, xy, radius)
+    vals = vals.astype(np.float64)
     # the level between the sectors: the mean of a ring around an X-corner (cheaper than the
     # median and as good for the sign pattern; the checks below reject what it does not fit)
     vals = vals - vals.mean(axis=1, keepdims=True)

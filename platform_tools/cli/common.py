@@ -2,7 +2,7 @@
 
 Exit codes: 0 ok, 1 a check failed, 2 bad input or usage (argparse uses 2 for usage too).
 Errors the user can fix are one line on stderr, never a traceback: raise :class:`UserError`
-(or let a :class:`RigError` / :class:`OutputError` through) and :func:`run` prints it.
+(or let an :class:`InputProblems` such as RigError, or an :class:`OutputError`, through) and :func:`run` prints it.
 ``-v`` / ``-q`` set logging; ``--json`` prints one JSON document on stdout for scripts.
 """
 from __future__ import annotations
@@ -15,7 +15,8 @@ from typing import Any, Callable, Sequence
 
 from .. import progress
 from ..atomic import OutputError
-from ..rig import DEFAULT_RIG, Rig, RigError, load_rig
+from ..problems import InputProblems
+from ..rig import DEFAULT_RIG, Rig, load_rig
 
 EXIT_OK = 0
 EXIT_CHECK_FAILED = 1
@@ -82,7 +83,7 @@ def run(handler: Callable[[argparse.Namespace], int | None], args: argparse.Name
     try:
         code = handler(args)
         return EXIT_OK if code is None else int(code)
-    except RigError as exc:
+    except InputProblems as exc:   # a rig file, a catalogue, steps.yaml ...: one line per problem
         for line in exc.lines:
             error(line)
         return EXIT_BAD_INPUT

@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Sequence
 
+from ..problems import InputProblems
 from .model import Rig
 from .overrides import Override, OverrideError, apply_overrides, override_for, parse_override
 from .rules import check_rules
@@ -19,12 +20,8 @@ from .yamlsource import YamlSource, YamlSourceError, load_yaml_file
 DEFAULT_RIG = Path(__file__).resolve().parents[2] / "config" / "rig.yaml"
 
 
-class RigError(Exception):
+class RigError(InputProblems):
     """The rig description is not valid. ``lines`` holds one message per problem."""
-
-    def __init__(self, lines: Sequence[str]):
-        self.lines = list(lines)
-        super().__init__("\n".join(self.lines))
 
 
 def _locate(problem: Problem, source: YamlSource, overrides: Sequence[Override]) -> str:
