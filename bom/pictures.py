@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cad.render import placed_actor, polydata, vtk_module
+from cad.render import placed_actor, polydata, snapshot, vtk_module
 
 HIGHLIGHT = (0.12, 0.47, 0.95)   # blue: nothing else in the rig is blue (PETG orange, copper, black parts)
 FADE = 0.6                       # earlier parts: blended this far towards light grey
@@ -44,29 +44,7 @@ def render_steps(asm, steps, folder: Path, *, size=(960, 640), tolerance: float 
                 colour, opacity = tuple(c * (1 - FADE) + np.array([0.85, 0.86, 0.88]) * FADE), 0.55
             ren.AddActor(placed_actor(vtk, meshes[key], colour, exploded[name], opacity))
         done.extend(st.nodes)
-        win = vtk.vtkRenderWindow()
-        win.SetOffScreenRendering(1)
-        win.SetAlphaBitPlanes(1)
-        win.AddRenderer(ren)
-        win.SetSize(*size)
-        cam = ren.GetActiveCamera()
-        d = np.asarray(st.view, dtype=float)
-        d /= np.linalg.norm(d)
-        cam.SetFocalPoint(0, 0, 0)
-        cam.SetPosition(*(d * 1000))
-        cam.SetViewUp(*((0, 0, 1) if abs(d[2]) < 0.99 else (1, 0, 0)))
-        ren.ResetCamera()
-        cam.Zoom(1.25)
-        win.Render()
-        grab = vtk.vtkWindowToImageFilter()
-        grab.SetInput(win)
-        grab.Update()
-        p = folder / f"step_{st.number:02d}.png"
-        writer = vtk.vtkPNGWriter()
-        writer.SetFileName(str(p))
-        writer.SetInputConnection(grab.GetOutputPort())
-        writer.Write()
-        win.Finalize()
+        p = snapshot(vtk, ren, st.view, size, folder / f"step_{st.number:02d}.png", zoom=1.25, alpha=True)
         st.picture = f"img/{p.name}"
         out.append(p)
     return out

@@ -55,6 +55,34 @@ def placed_actor(vtk, poly, colour, pose, opacity: float = 1.0):
     return actor
 
 
+def snapshot(vtk, ren, direction, size, path: Path, *, zoom: float, alpha: bool = False) -> Path:
+    """Render ``ren`` off screen, looking at the origin from ``direction`` (z up), into a PNG."""
+    win = vtk.vtkRenderWindow()
+    win.SetOffScreenRendering(1)
+    if alpha:
+        win.SetAlphaBitPlanes(1)
+    win.AddRenderer(ren)
+    win.SetSize(*size)
+    cam = ren.GetActiveCamera()
+    d = np.asarray(direction, dtype=float)
+    d /= np.linalg.norm(d)
+    cam.SetFocalPoint(0, 0, 0)
+    cam.SetPosition(*(d * 1000))
+    cam.SetViewUp(*((0, 0, 1) if abs(d[2]) < 0.99 else (1, 0, 0)))
+    ren.ResetCamera()
+    cam.Zoom(zoom)
+    win.Render()
+    grab = vtk.vtkWindowToImageFilter()
+    grab.SetInput(win)
+    grab.Update()
+    writer = vtk.vtkPNGWriter()
+    writer.SetFileName(str(path))
+    writer.SetInputConnection(grab.GetOutputPort())
+    writer.Write()
+    win.Finalize()
+    return path
+
+
 def render_views(asm: Assembly, folder: Path, views: dict, exploded: dict, tolerance: float,
                  size=(1200, 900)) -> list[Path]:
     vtk = vtk_module()
@@ -69,27 +97,7 @@ def render_views(asm: Assembly, folder: Path, views: dict, exploded: dict, toler
             if key not in meshes:
                 meshes[key] = polydata(vtk, n.local_shape(asm.cache), tolerance)
             ren.AddActor(placed_actor(vtk, meshes[key], n.colour, pose))
-        win = vtk.vtkRenderWindow()
-        win.SetOffScreenRendering(1)
-        win.AddRenderer(ren)
-        win.SetSize(*size)
-        cam = ren.GetActiveCamera()
-        d = np.asarray(direction, dtype=float)
-        d /= np.linalg.norm(d)
-        cam.SetFocalPoint(0, 0, 0)
-        cam.SetPosition(*(d * 1000))
-        cam.SetViewUp(*((0, 0, 1) if abs(d[2]) < 0.99 else (1, 0, 0)))
-        ren.ResetCamera()
-        cam.Zoom(1.3)
-        win.Render()
-        grab = vtk.vtkWindowToImageFilter()
-        grab.SetInput(win)
-        grab.Update()
-        writer = vtk.vtkPNGWriter()
         p = folder / f"{view}.png"
-        writer.SetFileName(str(p))
-        writer.SetInputConnection(grab.GetOutputPort())
-        writer.Write()
-        win.Finalize()
+        snapshot(vtk, ren, direction, size, p, zoom=1.3)
         out.append(p)
     return out
