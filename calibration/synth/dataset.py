@@ -12,7 +12,7 @@ from platform_tools import atomic
 from platform_tools.progress import progress
 
 from .board import Board
-from .difficulty import level
+from .difficulty import Difficulty, level
 from .lens import Lens
 from .poses import sample_view
 from .render import render_image
@@ -31,13 +31,16 @@ def rt_from_R_t(R: np.ndarray, t: np.ndarray) -> list[float]:
     return [float(x) for x in np.concatenate([mrcal.r_from_R(np.ascontiguousarray(R)), t])]
 
 
-def render_dataset(out_dir, n: int = 40, difficulty: str = "real", board=(10, 7), square: float = 0.04,
+def render_dataset(out_dir, n: int = 40, difficulty: str | Difficulty = "real", board=(10, 7), square: float = 0.04,
                    seed: int = 0, lens=None, *, camera: str = "thermal_left", rig=None,
                    show_progress: bool = True) -> dict:
     """Render ``n`` images of a ``board`` (W, H inner corners, ``square`` metres) through ``lens``
     (default: the nominal thermal lens of ``camera`` in the rig description) into ``out_dir``,
-    replaced whole and atomically. Returns the truth (also written to truth.json)."""
-    diff = level(difficulty)
+    replaced whole and atomically. ``difficulty``: a name (easy, real, hard) or a :class:`Difficulty`
+    (e.g. one effect switched off, as bench/bench_corner_bias.py does). Returns the truth (also
+    written to truth.json)."""
+    diff = difficulty if isinstance(difficulty, Difficulty) else level(difficulty)
+    difficulty = diff.name
     W, H = int(board[0]), int(board[1])
     if W < 2 or H < 2:
         raise ValueError(f"board {W}x{H}: needs at least 2x2 inner corners")
