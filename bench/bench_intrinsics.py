@@ -81,9 +81,9 @@ def run_ours(src: Path, out: Path, solver: str, lens_model: str | None = None):
 
 def _info(s: dict) -> dict:
     v = s["verdict"]
+    grade = v.get("grade") or ("trusted" if v["trustworthy"] else "not-trusted")   # older summaries: no grade
     return dict(images=s["n_images_used"], rejected=s["n_rejected_images"],
-                verdict=("trusted" if v["trustworthy"] else "NOT trusted") +
-                f" ({100 * s['validity']['trusted_share']:.0f}% valid)",
+                verdict=f"{grade} ({100 * s['validity']['trusted_share']:.0f}% valid)",
                 why=v["headline"][:110])
 
 

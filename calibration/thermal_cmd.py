@@ -2,8 +2,10 @@
 
 Detects the board in every image (with progress), writes corners.vnl, solves (mrcal, or OpenCV's
 fisheye), and writes the model in every format with report.html, all into --out as one folder
-(nothing is written when anything fails). Exit 0: a trustworthy calibration; 1: it solved but the
-verdict says not to trust it (or the data cannot be solved); 2: bad input.
+(nothing is written when anything fails). Exit 0: the verdict is "trusted" (the whole image) or
+"trusted-within-region" (usable inside the valid-intrinsics region written into the .cameramodel;
+with --require-whole-image that exits 1 too); 1: it solved but the verdict is "not-trusted" (or the
+data cannot be solved); 2: bad input. --exit-zero: 0 whenever it solved.
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from platform_tools.cli.common import (CheckFailed, UserError, add_output_option
                                        rig_from_args)
 
 from .quiet import quiet_stderr
+from .report.verdict import MIN_TRUSTED_SHARE, TRUSTED, Verdict
 from .synth_cmd import parse_board
 
 log = logging.getLogger("calibration.thermal")
@@ -30,7 +33,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "--out: thermal.cameramodel (mrcal, with optimization_inputs), thermal_opencv.yaml, "
                     "thermal_camera_info.yaml (ROS), kalibr_camchain.yaml, corners.vnl and report.html "
                     "(coverage, residuals, projection uncertainty, per-image errors, verdict).",
-        epilog="Exit codes: 0 trustworthy; 1 solved but not trustworthy, or not solvable; 2 bad input.")
+        epilog="Verdict (report.html, --json verdict.grade): trusted (the whole image), trusted-within-region "
+               "(usable inside the valid-intrinsics region written into thermal.cameramodel: the central 80% "
+               f"of the image trusted and at least {100 * MIN_TRUSTED_SHARE:.0f}% of the whole image), not-trusted. "
+               "Exit codes: 0 trusted or trusted-within-region; 1 not-trusted (or trusted-within-region with "
+               "--require-whole-image), or not solvable; 2 bad input. --exit-zero: 0 whenever it solved.")
     add_rig_options(p)
     add_output_options(p)
     p.add_argument("--images", required=True, metavar="DIR|GLOB", help="folder or glob of 8/16-bit images")
@@ -43,9 +50,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--solver", choices=("mrcal", "opencv"), default="mrcal",
                    help="mrcal (default; gives projection uncertainty) or opencv (cv2.fisheye, Kannala-Brandt)")
     p.add_argument("--exit-zero", action="store_true",
-                   help="exit 0 even when the verdict is 'not trustworthy' (it stays in the report and --json)")
+                   help="exit 0 even when the verdict is not-trusted (it stays in the report and --json)")
+    p.add_argument("--require-whole-image", action="store_true",
+                   help="exit 1 unless the verdict is 'trusted' over the whole image (a model trusted only "
+                        "within its valid-intrinsics region fails too)")
     p.add_argument("--camera-name", default="thermal", help="camera name in the ROS/Kalibr files")
     p.set_defaults(handler=cmd_thermal)
+
+
+def accepted(verdict: Verdict, *, require_whole_image: bool = False) -> bool:
+    """Whether ``verdict`` exits 0 (before --exit-zero): trusted, or trusted within its region unless
+    the whole image is required."""
+    return verdict.grade == TRUSTED if require_whole_image else verdict.trustworthy
 
 
 def _check_square(square: float) -> float:
@@ -144,6 +160,7 @@ def cmd_thermal(args: argparse.Namespace) -> int:
     elif not args.quiet:
         print(f"{args.out}: {solution.solver} {solution.lensmodel}, {obs.n} images, RMS {solution.rms_px:.3f} px; "
               f"{out.verdict.headline}")
-    if not out.verdict.trustworthy and not args.exit_zero:
-        raise CheckFailed(f"{args.out}/report.html: calibration {out.verdict.headline}")
+    if not accepted(out.verdict, require_whole_image=args.require_whole_image) and not args.exit_zero:
+        need = "--require-whole-image: " if out.verdict.trustworthy else ""
+        raise CheckFailed(f"{args.out}/report.html: {need}calibration {out.verdict.headline}")
     return 0

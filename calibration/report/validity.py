@@ -11,7 +11,8 @@ A point of the image is trusted when all of these hold there:
 The largest connected trusted area becomes the valid-intrinsics region, a closed polygon in
 pixels, written into the .cameramodel as mrcal's ``valid_intrinsics_region`` (mrcal-show-*,
 mrcal.is_within_valid_intrinsics_region read it). The untrusted parts are named by ninth of the
-image ("the top-left corner") with what failed there, for the verdict.
+image ("the top-left corner") with what failed there, for the verdict, which also reads how much of
+the central 80% of the image is trusted (the same rectangle as calibration.validate.central_mask).
 """
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..validate import central_mask
 from .analysis import REGION_NAMES
 
 NO_DATA_RADIUS_PX = 50.0        # no observed corner nearer than this: no data (~8% of a 640 px width)
@@ -34,14 +36,18 @@ class RegionTrust:
     max_halves_diff_px: float       # over the untrusted points (nan without cross-validation)
     max_uncertainty_px: float       # over the untrusted points (nan without uncertainty)
 
-    def sentence(self) -> str:
-        parts = []
+    def short(self) -> str:
+        """What is wrong there, without the numbers behind it: "the top-left corner has no data"."""
         if self.no_data_share > 0:
             head = f"the {self.name} has no data"
             if self.no_data_share < 0.95:
                 head += f" in {100 * self.no_data_share:.0f}% of it"
-        else:
-            head = f"the {self.name} is not reliable"
+            return head
+        return f"the {self.name} is not reliable"
+
+    def sentence(self) -> str:
+        parts = []
+        head = self.short()
         if np.isfinite(self.max_halves_diff_px) and self.max_halves_diff_px > MAX_HALVES_DIFF_PX:
             parts.append(f"the halves disagree by {self.max_halves_diff_px:.1f} px there")
         elif np.isfinite(self.max_halves_diff_px):
@@ -60,13 +66,23 @@ class Validity:
     uncertainty_px: np.ndarray | None
     region: np.ndarray              # (M, 2) closed polygon, pixels; (0, 2) when nothing is trusted
     regions: list[RegionTrust] = field(default_factory=list)   # ninths with untrusted points
+    imagersize: tuple[int, int] | None = None   # None: the grid's extent (it covers the imager, border included)
 
     @property
     def trusted_share(self) -> float:
         return float(self.trusted.mean())
 
+    @property
+    def central_trusted_share(self) -> float:
+        """Share of the grid points in the central 80% of the image (validate.central_mask) that are
+        trusted; 0 when the grid has none there."""
+        size = self.imagersize or (int(round(float(self.grid[..., 0].max()))) + 1,
+                                   int(round(float(self.grid[..., 1].max()))) + 1)
+        cm = central_mask(self.grid, size)
+        return float(self.trusted[cm].mean()) if cm.any() else 0.0
+
     def summary(self) -> dict:
-        return dict(trusted_share=self.trusted_share,
+        return dict(trusted_share=self.trusted_share, central_trusted_share=self.central_trusted_share,
                     valid_intrinsics_region=[[float(x), float(y)] for x, y in self.region],
                     untrusted=[dict(region=r.name, share=r.untrusted_share, no_data_share=r.no_data_share,
                                     max_halves_diff_px=None if not np.isfinite(r.max_halves_diff_px)
@@ -123,4 +139,5 @@ def validity(grid: np.ndarray, points: np.ndarray, imagersize: tuple[int, int], 
             regions.append(RegionTrust(REGION_NAMES[j][i], float(bad.sum() / cell.sum()),
                                        float((cell & no_data).sum() / cell.sum()), hd, un))
     regions.sort(key=lambda r: -r.untrusted_share)
-    return Validity(grid, trusted, dist, halves_diff_px, uncertainty_px, _polygon(trusted, grid), regions)
+    return Validity(grid, trusted, dist, halves_diff_px, uncertainty_px, _polygon(trusted, grid), regions,
+                    (int(w), int(h)))

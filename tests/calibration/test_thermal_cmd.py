@@ -59,7 +59,11 @@ def test_calibrate_validate_end_to_end_and_wrong_board(synth_set, tmp_path, caps
                             "--out", str(out), "--json", "-q")
     summary = json.loads(stdout)
     assert code in (0, 1), err
+    grade = summary["verdict"]["grade"]
+    assert grade in ("trusted", "trusted-within-region", "not-trusted")
+    assert summary["verdict"]["trustworthy"] == (grade != "not-trusted")
     assert (code == 0) == summary["verdict"]["trustworthy"]
+    assert 0 <= summary["verdict"]["trusted_share"] <= 1
     for name in ("thermal.cameramodel", "thermal_opencv.yaml", "thermal_camera_info.yaml",
                  "kalibr_camchain.yaml", "corners.vnl", "report.html"):
         assert (out / name).is_file(), name
@@ -74,9 +78,12 @@ def test_calibrate_validate_end_to_end_and_wrong_board(synth_set, tmp_path, caps
     code, stdout, err = run(capsys, "validate", str(out / "thermal.cameramodel"), "--truth", str(src), "--json")
     v = json.loads(stdout)
     assert code == (0 if v["within_targets"] else 1)
-    # the verdict must never call a calibration trustworthy that is far from the truth
+    # the verdict must never call a calibration trusted (over the whole image) that is far from the
+    # truth, nor trusted within its region that is far from the truth inside that region
     if v["rms_px"] > 0.3:
-        assert not summary["verdict"]["trustworthy"], (v, summary["verdict"])
+        assert grade != "trusted", (v, summary["verdict"])
+    if _rms_in_valid_region(m, mrcal.cameramodel(str(src / "truth.cameramodel"))) > 0.3:
+        assert grade == "not-trusted", (v, summary["verdict"])
 
     # the wrong board size: nothing found, exit 1, the previous output untouched
     before = sorted(p.name for p in out.iterdir())
@@ -84,6 +91,79 @@ def test_calibrate_validate_end_to_end_and_wrong_board(synth_set, tmp_path, caps
                        "--out", str(out))
     assert code == 1 and "--board" in err
     assert sorted(p.name for p in out.iterdir()) == before
+
+
+def _rms_in_valid_region(model, truth) -> float:
+    """RMS projection difference against the truth inside the model's valid-intrinsics region (the
+    rotation fitted over the central 80%: a model used within its region is aligned there)."""
+    from calibration.validate import compare_models
+    c = compare_models(model, truth, grid_width=32, fit_fraction=0.8)
+    region = model.valid_intrinsics_region()
+    if region is None or len(region) < 4:
+        return 0.0          # nothing is claimed
+    inside = np.array([mrcal.is_within_valid_intrinsics_region(q, model) for q in c.grid.reshape(-1, 2)])
+    d = c.diff_px.reshape(-1)[inside]
+    return float(np.sqrt(np.mean(d ** 2))) if d.size else 0.0
+
+
+def test_exit_code_follows_the_grade():
+    from calibration.report.verdict import Verdict
+    from calibration.thermal_cmd import accepted
+    for grade, default, whole in [("trusted", True, True), ("trusted-within-region", True, False),
+                                  ("not-trusted", False, False)]:
+        v = Verdict(grade)
+        assert accepted(v) is default and accepted(v, require_whole_image=True) is whole, grade
+
+
+@pytest.fixture
+def graded(monkeypatch):
+    """calibrate thermal with its verdict forced to a grade (the solve and the outputs are real)."""
+    from calibration.intrinsics import outputs
+    from calibration.report.verdict import Verdict
+    forced = {}
+
+    def judge(**kw):
+        return Verdict(forced["grade"], reasons=["forced"] if forced["grade"] == "not-trusted" else [],
+                       trusted_share=0.9, limits=["the top-left corner has no data"])
+    monkeypatch.setattr(outputs, "judge", judge)
+    return forced
+
+
+@pytest.mark.slow
+def test_exit_codes_of_each_grade_and_require_whole_image(synth_set, tmp_path, capsys, graded):
+    src = synth_set("easy", n=12, seed=4)
+    base = ("thermal", "--images", str(src), "--board", "10x7", "--square", "0.04", "--out", str(tmp_path / "o"))
+    for grade, flags, want in [("trusted-within-region", (), 0),
+                               ("trusted-within-region", ("--require-whole-image",), 1),
+                               ("trusted-within-region", ("--require-whole-image", "--exit-zero"), 0),
+                               ("trusted", ("--require-whole-image",), 0),
+                               ("not-trusted", (), 1),
+                               ("not-trusted", ("--exit-zero",), 0)]:
+        graded["grade"] = grade
+        code, stdout, err = run(capsys, *base, *flags, "--json")
+        assert code == want, (grade, flags, err)
+        summary = json.loads(stdout)
+        assert summary["verdict"]["grade"] == grade
+        assert summary["verdict"]["trustworthy"] == (grade != "not-trusted")
+        page = (tmp_path / "o" / "report.html").read_text()
+        assert f'data-grade="{grade}"' in page
+        style = {"trusted": "ok", "trusted-within-region": "partial", "not-trusted": "bad"}[grade]
+        assert f'class="verdict {style}"' in page
+        if code:
+            assert len(err.strip().splitlines()) == 1
+            assert ("--require-whole-image" in err) == (grade == "trusted-within-region"), err
+    graded["grade"] = "trusted-within-region"
+    code, stdout, _ = run(capsys, *base)
+    assert code == 0 and "trusted within its valid region (90% of the image): the top-left corner has no data" in stdout
+
+
+def test_help_names_the_grades_and_exit_codes(capsys):
+    with pytest.raises(SystemExit):
+        main(["thermal", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    for s in ("--require-whole-image", "trusted-within-region", "not-trusted", "Exit codes: 0 trusted or "
+              "trusted-within-region; 1 not-trusted"):
+        assert s in out, s
 
 
 def test_validate_bad_input(tmp_path, capsys):
