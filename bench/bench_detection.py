@@ -15,6 +15,10 @@ orderings for the other tools since their order convention differs); corners > 1
 mislabelled (> 3 px from their own truth), and how many of the visible corners within 80 px of an
 image corner it reports correctly (where a fisheye fit needs data). OpenCV and mrgingham get 8-bit images (0.5-99.5 percentile stretch), as
 they need; ours reads the 16-bit counts.
+
+Diagnostics (the metrics stay the same): --only-ours skips OpenCV and mrgingham; --missed names, per
+set, the fully visible boards ours did not find complete (with the labels missing and the reason a
+view was dropped) and any board with mislabelled corners.
 """
 from __future__ import annotations
 
@@ -56,9 +60,10 @@ def score(pred, truth):
 CORNER_ZONE = 80.0     # px from an image corner: where a fisheye fit most needs data
 
 
-def run_ours(folder, files, board, partial=None):
+def run_ours(folder, files, board, partial=None, reasons=None):
     """Complete boards per file (None otherwise); every board found, partial or not, goes into
-    ``partial`` (file -> corners with NaN) when given."""
+    ``partial`` (file -> corners with NaN) when given, and the reason a board was dropped into
+    ``reasons`` (file -> text, empty if kept)."""
     out, ts = {}, []
     for f in files:
         img = cv2.imread(str(folder / f), cv2.IMREAD_UNCHANGED)
@@ -68,7 +73,31 @@ def run_ours(folder, files, board, partial=None):
         out[f] = d.corners if d.complete else None
         if partial is not None:
             partial[f] = d.corners
+        if reasons is not None:
+            reasons[f] = d.reason
     return out, ts
+
+
+def print_missed(truth, found, reasons):
+    """Diagnostics (--missed): the fully visible, unoccluded boards ours did not find complete
+    (file, corners found, the grid labels missing, the reason if the view was dropped), and every
+    board with mislabelled corners (more than 3 px from their own truth)."""
+    W, H = truth["board"]["width"], truth["board"]["height"]
+    for im in truth["images"]:
+        c = found.get(im["file"])
+        q = np.array([x if x is not None else [np.nan, np.nan] for x in im["corners"]], float)
+        rep = np.isfinite(c[:, 0]) if c is not None else np.zeros(W * H, bool)
+        if im["visible"] == W * H and not im["occluded"] and not rep.all():
+            miss = [(k % W, k // W) for k in np.flatnonzero(~rep)]
+            more = f" (+{len(miss) - 8} more)" if len(miss) > 8 else ""
+            why = reasons.get(im["file"], "")
+            print(f"    missed {im['file']}: {int(rep.sum())} of {W * H}, missing {miss[:8]}{more}"
+                  + (f": {why}" if why else ""))
+        if c is not None:
+            with np.errstate(invalid="ignore"):
+                wrong = rep & ~(np.linalg.norm(c - q, axis=1) <= 3.0)
+            if wrong.any():
+                print(f"    MISLABELLED {im['file']}: {[(k % W, k // W) for k in np.flatnonzero(wrong)]}")
 
 
 def evaluate_all(truth, found):
@@ -155,6 +184,9 @@ def main(argv=None):
     ap.add_argument("--seeds", type=str, default="", help="comma-separated seeds, e.g. 100,200,300")
     ap.add_argument("--work", type=Path, default=Path("build/bench_detection"))
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--only-ours", action="store_true", help="diagnostics: run our detector only")
+    ap.add_argument("--missed", action="store_true",
+                    help="diagnostics: name the fully visible boards ours missed, and any mislabelled corners")
     args = ap.parse_args(argv)
     sets = [("real", (10, 7)), ("hard", (10, 7)), ("real", (7, 7)), ("hard", (7, 7))]
     seeds = [int(x) for x in args.seeds.split(",") if x.strip()] or [args.seed]
@@ -197,10 +229,12 @@ def run_seed(args, seed, sets, work):
         folder = work / f"{diff}_{board[0]}x{board[1]}"
         truth = render_dataset(folder, n=args.n, difficulty=diff, board=board, seed=seed, show_progress=False)
         files = [im["file"] for im in truth["images"]]
-        partial = {}
-        for name, fn in (("ours", lambda: run_ours(folder, files, board, partial)),
+        partial, reasons = {}, {}
+        for name, fn in (("ours", lambda: run_ours(folder, files, board, partial, reasons)),
                          ("opencv_sb", lambda: run_opencv(folder, files, board)),
                          ("mrgingham", lambda: run_mrgingham(folder, files, board, work))):
+            if args.only_ours and name != "ours":
+                continue
             res, ts = fn()
             if res is None:
                 continue
@@ -214,6 +248,8 @@ def run_seed(args, seed, sets, work):
             table.append(row)
             print(f"{row['set']:12s} {name:10s} complete {row['found']:3d}/{row['full']:3d} ({100 * row['rate']:5.1f}%)  "
                   f"rms {row['rms']:.3f} px  wrong>1px {row['wrong']:4d}  {row['ms']:7.1f} ms/image{extra}", flush=True)
+            if name == "ours" and args.missed:
+                print_missed(truth, partial, reasons)
     ours = {r["set"]: r for r in table if r["detector"] == "ours"}
     print("\nratios (other / ours): time and rms")
     for r in table:

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .candidates import find_candidates, normalise
+from .complete import complete
 from .grid import anchor, label, link, orient
 from .grow import grow, lattice_outliers
 from .refine import image_noise, levels, refine
@@ -100,9 +101,12 @@ def detect_corners(image: np.ndarray, board: tuple[int, int] = (10, 7)) -> Detec
     fine = refine(f, xy, spacing)
     fine[lattice_outliers(fine, ij)] = np.nan
     ok = np.isfinite(fine[:, 0])
+    # board corners still missing (too faint for the growth, dropped by the refinement): predicted
+    # from the anchored grid, kept where the image shows that corner (complete.py)
+    fine, ij, _ = complete(f, S, fine[ok], ij[ok], (W, H), noise)
     corners = np.full((W * H, 2), np.nan)
     lv = -np.ones(W * H, int)
     k = ij[:, 1] * W + ij[:, 0]
-    corners[k[ok]] = fine[ok]
-    lv[k[ok]] = levels(f, fine[ok], local_sd, noise)
+    corners[k] = fine
+    lv[k] = levels(f, fine, local_sd, noise)
     return Detection((W, H), corners, lv, "", len(cands.xy))

@@ -33,12 +33,13 @@ def rt_from_R_t(R: np.ndarray, t: np.ndarray) -> list[float]:
 
 def render_dataset(out_dir, n: int = 40, difficulty: str | Difficulty = "real", board=(10, 7), square: float = 0.04,
                    seed: int = 0, lens=None, *, camera: str = "thermal_left", rig=None,
-                   show_progress: bool = True) -> dict:
+                   show_progress: bool = True, only=None) -> dict:
     """Render ``n`` images of a ``board`` (W, H inner corners, ``square`` metres) through ``lens``
     (default: the nominal thermal lens of ``camera`` in the rig description) into ``out_dir``,
     replaced whole and atomically. ``difficulty``: a name (easy, real, hard) or a :class:`Difficulty`
     (e.g. one effect switched off, as bench/bench_corner_bias.py does). Returns the truth (also
-    written to truth.json)."""
+    written to truth.json). ``only``: render just these image indices (each the same pixels as in
+    the whole set: every image has its own random stream), e.g. one bench image for a test."""
     diff = difficulty if isinstance(difficulty, Difficulty) else level(difficulty)
     difficulty = diff.name
     W, H = int(board[0]), int(board[1])
@@ -55,9 +56,9 @@ def render_dataset(out_dir, n: int = 40, difficulty: str | Difficulty = "real", 
     images = []
     out_dir = Path(out_dir)
     with atomic.OutputDir(out_dir) as stage:
-        items = range(n)
+        items = range(n) if only is None else sorted(int(k) for k in only if 0 <= int(k) < n)
         if show_progress:
-            items = progress(items, desc=f"rendering {difficulty}", total=n, unit="image")
+            items = progress(items, desc=f"rendering {difficulty}", total=len(items), unit="image")
         for k in items:
             irng = np.random.default_rng([seed, k])
             view = sample_view(irng, lens, b, diff)
