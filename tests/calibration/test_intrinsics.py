@@ -126,4 +126,3 @@ def test_cross_validation_halves_are_disjoint_and_agree_on_good_data(truth, corn
     assert cv.diff_px.shape == cv.grid.shape[:2]
     assert np.sqrt(np.mean(cv.diff_px[8:-8, 8:-8] ** 2)) < 0.2
     assert cross_validate(sol.__class__(**{**sol.__dict__, "observations": sol.observations.subset([0, 1, 2, 3, 4])})) is None
-
