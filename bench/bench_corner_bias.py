@@ -26,7 +26,6 @@ import argparse
 import dataclasses
 import json
 import os
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -43,6 +42,8 @@ from calibration.intrinsics.sensitivity import parameter_shift, problem_at_truth
 from calibration.synth import render_dataset  # noqa: E402
 from calibration.synth.difficulty import level  # noqa: E402
 from calibration.validate import central_mask  # noqa: E402
+
+import bench_detection  # noqa: E402  (its 8-bit conversion and the reference tools' runs)
 
 BOARD = (8, 8)
 SQUARE = 0.04
@@ -68,11 +69,6 @@ def difficulty(on: dict | None, name: str):
         return real
     kw = {k: v for k, v in OFF.items() if k not in on}
     return dataclasses.replace(real, name=name, **kw)
-
-
-def to8(img):
-    lo, hi = np.percentile(img, [0.5, 99.5])
-    return np.clip((img.astype(np.float32) - lo) / max(hi - lo, 1) * 255, 0, 255).astype(np.uint8)
 
 
 def square_symmetries(c: np.ndarray, w: int, h: int):
@@ -101,28 +97,11 @@ def run_ours(folder: Path, files: list[str]) -> dict:
 
 
 def run_opencv(folder: Path, files: list[str]) -> dict:
-    out = {}
-    for f in files:
-        ok, c = cv2.findChessboardCornersSB(to8(cv2.imread(str(folder / f), cv2.IMREAD_UNCHANGED)), BOARD,
-                                            flags=cv2.CALIB_CB_EXHAUSTIVE | cv2.CALIB_CB_ACCURACY)
-        out[f] = c.reshape(-1, 2).astype(float) if ok else None
-    return out
+    return bench_detection.run_opencv(folder, files, BOARD)[0]
 
 
 def run_mrgingham(folder: Path, files: list[str]) -> dict:
-    d8 = folder.parent / (folder.name + "_8bit")
-    d8.mkdir(parents=True, exist_ok=True)
-    for f in files:
-        cv2.imwrite(str(d8 / f), to8(cv2.imread(str(folder / f), cv2.IMREAD_UNCHANGED)))
-    p = subprocess.run(["mrgingham", "--jobs", "1", "--gridn", str(BOARD[0]), str(d8 / "*.png")],
-                       capture_output=True, text=True, check=True)
-    rows: dict[str, list] = {}
-    for line in p.stdout.splitlines():
-        if line.startswith("#") or not line.strip():
-            continue
-        name, x, y = line.split()[:3]
-        rows.setdefault(Path(name).name, []).append((np.nan if x == "-" else float(x), np.nan if y == "-" else float(y)))
-    return {f: (np.array(rows[f]) if len(rows.get(f, [])) == BOARD[0] * BOARD[1] else None) for f in files}
+    return bench_detection.run_mrgingham(folder, files, BOARD, folder.parent)[0]
 
 
 DETECTORS = [("ours", run_ours), ("OpenCV SB", run_opencv), ("mrgingham", run_mrgingham)]

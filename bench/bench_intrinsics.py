@@ -37,7 +37,16 @@ from calibration.validate import compare  # noqa: E402
 
 BOARD = (8, 8)
 SQUARE = 0.04
-FOCAL = 408.3   # nominal seed, as calibrate thermal takes it from the rig (4.9 mm / 12 um)
+
+
+def _nominal_focal_px() -> float:
+    """The seed calibrate thermal takes from the rig description (focal length / pixel pitch)."""
+    from platform_tools.rig import load_rig
+    rig = load_rig()
+    return rig.focal_px(rig.camera_model(rig.desc.sensors.thermal.camera_model))
+
+
+FOCAL = _nominal_focal_px()
 
 
 def to8bit(src: Path, dst: Path) -> list[Path]:

@@ -24,25 +24,17 @@ def problem_at_truth(lensmodel: str, intrinsics: np.ndarray, rt_cam_board: np.nd
     rejection, as the final OPENCV8 solve of calibrate thermal; the board warp is a free parameter as
     there (``optimize_warp``)."""
     import mrcal
-    w, h = board
+
+    from .mrcal_solver import _base_inputs
+    from .observations import BoardObservations
     n = len(rt_cam_board)
-    c = np.asarray(corners, float).reshape(n, h, w, 2)
-    seen = np.isfinite(c).all(axis=-1)
-    ob = np.empty((n, h, w, 3))
-    ob[..., :2] = np.where(seen[..., None], c, -1.0)
-    ob[..., 2] = np.where(seen, 1.0, -1.0)
-    oi = dict(intrinsics=np.atleast_2d(np.asarray(intrinsics, float)).copy(),
-              extrinsics_rt_fromref=np.zeros((0, 6)), frames_rt_toref=np.asarray(rt_cam_board, float).copy(),
-              points=None, observations_board=ob,
-              indices_frame_camintrinsics_camextrinsics=np.column_stack(
-                  [np.arange(n), np.zeros(n), -np.ones(n)]).astype(np.int32),
-              observations_point=None, indices_point_camintrinsics_camextrinsics=None,
-              lensmodel=lensmodel, imagersizes=np.array([imagersize], dtype=np.int32),
+    c = np.asarray(corners, float).reshape(n, -1, 2)
+    obs = BoardObservations([str(i) for i in range(n)], c, np.ones(c.shape[:2]), tuple(board), float(square_m),
+                            tuple(imagersize))
+    oi = _base_inputs(obs, lensmodel, intrinsics, rt_cam_board)
+    oi.update(do_apply_regularization=False, do_optimize_extrinsics=False,
               calobject_warp=np.zeros(2) if optimize_warp else None,
-              do_optimize_intrinsics_core=True, do_optimize_intrinsics_distortions=True,
-              do_optimize_extrinsics=False, do_optimize_frames=True, do_optimize_calobject_warp=optimize_warp,
-              calibration_object_spacing=float(square_m), do_apply_outlier_rejection=False,
-              do_apply_regularization=False, verbose=False)
+              do_optimize_calobject_warp=optimize_warp)
     mrcal.optimize(**oi)      # already at the optimum up to float rounding; this only polishes
     return oi
 

@@ -413,19 +413,15 @@ def test_a_hand_over_the_rim_does_not_shift_the_labels(synth_set):
     in their lower half only, their mean looked like the board's plain border, and the board came
     out labelled one column off (40 corners). Each half of a line must now look like the border.
     Whatever the detector reports here must carry its own label."""
-    folder = synth_set("hard", n=34, seed=200, board=(7, 7), only=[33])
-    im = json.loads((folder / "truth.json").read_text())["images"][0]
-    assert im["file"] == "033.png" and im["occluded"]
-    q = np.array([c if c is not None else [np.nan, np.nan] for c in im["corners"]], float)
-    det = detect_corners(cv2.imread(str(folder / im["file"]), cv2.IMREAD_UNCHANGED), (7, 7))
-    rep = np.isfinite(det.corners[:, 0])
-    err = np.linalg.norm(det.corners[rep] - q[rep], axis=1)
+    det, err, im = _bench_image(synth_set, 200, 33)
+    assert im["occluded"]
     assert not (err > 3.0).any(), f"{int((err > 3).sum())} corners mislabelled"
 
 
 def _bench_image(synth_set, seed, k, board=(7, 7), difficulty="hard"):
     folder = synth_set(difficulty, n=k + 1, seed=seed, board=board, only=[k])
     im = json.loads((folder / "truth.json").read_text())["images"][0]
+    assert im["file"] == f"{k:03d}.png"
     q = np.array([c if c is not None else [np.nan, np.nan] for c in im["corners"]], float)
     det = detect_corners(cv2.imread(str(folder / im["file"]), cv2.IMREAD_UNCHANGED), board)
     rep = np.isfinite(det.corners[:, 0])
