@@ -28,7 +28,7 @@ from calibration.extrinsics.cad import CAMERAS  # noqa: E402
 from calibration.extrinsics.outputs import CameraIntrinsics  # noqa: E402
 from calibration.extrinsics.solve import mapping_error_px, rgb_to_thermal_px  # noqa: E402
 from calibration.rigsynth import render_rig_dataset  # noqa: E402
-from platform_tools.frames import Pose  # noqa: E402
+from platform_tools.rig.frames import Pose  # noqa: E402
 
 
 def main() -> int:

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from platform_tools.problems import InputProblems
+from platform_tools.rig.problems import InputProblems
 
 from .catalogue import LoadedCatalogue
 from .catalogue_schema import Category, CatalogueEntry

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator
 
-from platform_tools.problems import InputProblems
+from platform_tools.rig.problems import InputProblems
 from platform_tools.rig import Rig
 from platform_tools.rig.typed import Problem, closest, convert
 from platform_tools.rig.yamlsource import YamlSource, YamlSourceError, load_yaml_file

@@ -6,7 +6,7 @@
 Exit 0 ok, 2 bad input: a malformed catalogue or steps file, a part the assembly places with no
 catalogue entry, a catalogue entry used nowhere, a step naming an unknown node, a BOM line no step uses;
 every problem one line naming the file, its line and the entry. Every check runs before anything is
-written, and the output folder is swapped in whole (platform_tools.atomic.OutputDir): a failed run
+written, and the output folder is swapped in whole (platform_tools.rig.atomic.OutputDir): a failed run
 leaves the previous output as it was.
 """
 from __future__ import annotations
@@ -14,8 +14,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from platform_tools.atomic import OutputDir
-from platform_tools.cli.common import UserError, add_output_options, add_rig_options, print_json, rig_from_args
+from platform_tools.rig.atomic import OutputDir
+from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, print_json,
+    rig_from_args)
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -19,7 +19,7 @@ from typing import Annotated, Literal, Mapping, Optional
 import jinja2
 
 from platform_tools.rig.typed import Gt, closest, convert
-from platform_tools.problems import InputProblems
+from platform_tools.rig.problems import InputProblems
 from platform_tools.rig.yamlsource import YamlSourceError, load_yaml_file
 
 from .bom import Bom, Line

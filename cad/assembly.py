@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import cadquery as cq
 import numpy as np
 
-from platform_tools.frames import Pose
+from platform_tools.rig.frames import Pose
 from platform_tools.rig import Rig
 
 from . import design

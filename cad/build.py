@@ -18,9 +18,9 @@ from pathlib import Path
 if __package__ in (None, ""):  # run as a script from the repo root: make `cad` and `platform_tools` importable
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from platform_tools.atomic import OutputDir, write_text  # noqa: E402
-from platform_tools.cli.common import (UserError, add_output_options, add_rig_options, dispatch,  # noqa: E402
-                                       print_json, rig_from_args)
+from platform_tools.rig.atomic import OutputDir, write_text  # noqa: E402
+from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, dispatch, print_json,
+    rig_from_args)
 
 DEFAULT_OUT = Path(__file__).resolve().parents[1] / "build" / "cad"
 

@@ -21,8 +21,8 @@ from pathlib import Path
 import cadquery as cq
 import numpy as np
 
-from platform_tools.atomic import write_bytes
-from platform_tools.frames import Pose
+from platform_tools.rig.atomic import write_bytes
+from platform_tools.rig.frames import Pose
 
 log = logging.getLogger("cad.cache")
 REPO = Path(__file__).resolve().parents[1]

@@ -15,7 +15,7 @@ import cadquery as cq
 import numpy as np
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
-from platform_tools.progress import progress
+from platform_tools.rig.progress import progress
 
 from .assembly import PRINT_SETUPS, Assembly, Node
 from .design import fov_half_angles_deg

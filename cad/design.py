@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from platform_tools.frames import Pose
+from platform_tools.rig.frames import Pose
 from platform_tools.rig import Rig
 
 from .geom import Bounds, Vec3, pose_xyz

@@ -1,6 +1,6 @@
 """Exports: the assembly as one STEP with named, coloured parts and a GLB; every printed part as its
 own STEP and STL in its print orientation; SVG line drawings and PNG renders of the iso, front, top
-and exploded views. Everything goes into an :class:`~platform_tools.atomic.OutputDir` stage first."""
+and exploded views. Everything goes into an :class:`~platform_tools.rig.atomic.OutputDir` stage first."""
 from __future__ import annotations
 
 import json
@@ -9,8 +9,8 @@ from pathlib import Path
 import cadquery as cq
 import numpy as np
 
-from platform_tools.frames import Pose
-from platform_tools.progress import progress
+from platform_tools.rig.frames import Pose
+from platform_tools.rig.progress import progress
 
 from .assembly import PRINT_SETUPS, Assembly, assembly_tree, camera_frames
 from .geom import location, moved

@@ -1,5 +1,5 @@
 """Small geometry helpers shared by the part builders: boxes by their bounds, poses as CadQuery
-locations, shapes moved by a :class:`~platform_tools.frames.Pose`.
+locations, shapes moved by a :class:`~platform_tools.rig.frames.Pose`.
 
 Every builder works in millimetres in its part's own frame (x forward, y left, z up, as the rig).
 """
@@ -11,7 +11,7 @@ import cadquery as cq
 import numpy as np
 from OCP.gp import gp_Trsf
 
-from platform_tools.frames import Pose
+from platform_tools.rig.frames import Pose
 
 Vec3 = tuple[float, float, float]
 

@@ -5,9 +5,10 @@ from __future__ import annotations
 import argparse
 from typing import Sequence
 
-from platform_tools.cli.common import dispatch, tool_parser
+from platform_tools.rig.conventions import dispatch, tool_parser
 
-from . import detect_cmd, extrinsics_cmd, nominal_cmd, rig_cmd, synth_cmd, thermal_cmd, validate_cmd
+from calibration.commands import (detect as detect_cmd, extrinsics as extrinsics_cmd, nominal as nominal_cmd,
+    rig as rig_cmd, synth as synth_cmd, thermal as thermal_cmd, validate as validate_cmd)
 
 COMMANDS = [nominal_cmd, synth_cmd, detect_cmd, thermal_cmd, validate_cmd, extrinsics_cmd, rig_cmd]
 

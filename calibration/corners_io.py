@@ -19,7 +19,7 @@ from typing import Iterable
 
 import numpy as np
 
-from platform_tools import atomic
+from platform_tools.rig import atomic
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from platform_tools.atomic import OutputDir, OutputError, write_text
+from platform_tools.rig.atomic import OutputDir, OutputError, write_text
 
 
 def test_output_dir_swaps_in_whole(tmp_path: Path):
@@ -57,7 +57,7 @@ def test_write_text_replaces_atomically(tmp_path: Path):
 
 
 def test_open_atomic_failure_mid_stream_leaves_nothing(tmp_path: Path):
-    from platform_tools.atomic import open_atomic
+    from platform_tools.rig.atomic import open_atomic
     target = tmp_path / "stream.bin"
     with pytest.raises(RuntimeError):
         with open_atomic(target) as f:

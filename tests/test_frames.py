@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from platform_tools.frames import (R_BODY_OPTICAL, T_BODY_OPTICAL, Pose, matrix_to_quaternion, matrix_to_rotvec,
-                                   quaternion_to_matrix, rotvec_to_matrix, rpy_to_matrix)
+from platform_tools.rig.frames import (R_BODY_OPTICAL, T_BODY_OPTICAL, Pose, matrix_to_quaternion,
+    matrix_to_rotvec, quaternion_to_matrix, rotvec_to_matrix, rpy_to_matrix)
 
 
 def test_yaw_90_maps_forward_to_left():

@@ -82,7 +82,7 @@ class CaseSpec:
             r1 = max((c.length - 1.0) * math.tan(math.radians(c.half_angle_deg)), c.min_diameter / 2)
             # a straight hole as wide as the cone where it leaves the wall: no feathered edge inside
             tools.append(cylinder(2 * r1, c.length, c.apex, c.axis))
-        from platform_tools.frames import Pose
+        from platform_tools.rig.frames import Pose
         for part, rows in self.panel_cuts:
             M = np.array(rows)
             tools.append(moved(part.cutout(margin=0.25, depth=self.wall + 1.0), Pose.from_matrix(M)))

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 import cadquery as cq
 import numpy as np
 
-from platform_tools.frames import Pose
+from platform_tools.rig.frames import Pose
 
 from ..design import Hole
 from ..geom import cylinder

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import cadquery as cq
 
-from platform_tools.frames import T_BODY_OPTICAL, Pose
+from platform_tools.rig.frames import T_BODY_OPTICAL, Pose
 from platform_tools.rig import Rig
 
 from ..geom import Bounds, cylinder

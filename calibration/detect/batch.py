@@ -5,7 +5,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
 
-from platform_tools.progress import progress
+from platform_tools.rig.progress import progress
 
 from .detector import Detection, detect_corners
 from .images import ImageError, load_image

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from platform_tools.frames import T_BODY_OPTICAL, Pose
+from platform_tools.rig.frames import T_BODY_OPTICAL, Pose
 from platform_tools.rig import Rig
 
 #: the four cameras of the rig: short name (folder names, reports) -> optical frame

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
-from platform_tools.frames import Pose
+from platform_tools.rig.frames import Pose
 
 from .cad import CAMERAS, IMU, TOPIC_KEYS, FrameTree
 
@@ -161,9 +161,9 @@ def cameramodel_text(tree: FrameTree, short: str, lens: CameraIntrinsics, note: 
 
 
 def nominal_lenses(rig) -> dict[str, CameraIntrinsics]:
-    from ..nominal import nominal_cameras
-    by_frame = {c.name: c for c in nominal_cameras(rig)}
-    return {short: CameraIntrinsics(by_frame[f].lensmodel, by_frame[f].intrinsics, by_frame[f].imagersize)
+    from platform_tools.rig.nominal import nominal_cameras
+    by_frame = nominal_cameras(rig)
+    return {short: CameraIntrinsics(*by_frame[f].intrinsics(), tuple(int(x) for x in by_frame[f].imagersize()))
             for short, f in CAMERAS.items()}
 
 

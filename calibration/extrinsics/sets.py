@@ -142,7 +142,7 @@ def read_gray(path: Path) -> np.ndarray:
 
 def detect_sets(sets: list[ImageSet], board: tuple[int, int], square_m: float, *,
                 show_progress: bool = False) -> RigObservations:
-    from platform_tools.progress import progress
+    from platform_tools.rig.progress import progress
 
     from ..detect import detect_corners
     W, H = board

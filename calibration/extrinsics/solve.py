@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from platform_tools.frames import Pose
+from platform_tools.rig.frames import Pose
 
 from ..quiet import quiet_stderr
 from .cad import CAMERAS, FrameTree
@@ -219,7 +219,7 @@ def _solve_rig(obs: RigObservations, seeds: dict[str, CameraIntrinsics], cad: Fr
 def refined_tree(cad: FrameTree, sol: RigSolution) -> FrameTree:
     """The rig's frames with the refined cameras: the ZED left optical frame stays at its CAD pose
     (the anchor), every other camera is placed relative to it; body frames follow their optical frames."""
-    from platform_tools.frames import T_BODY_OPTICAL
+    from platform_tools.rig.frames import T_BODY_OPTICAL
     T = dict(cad.T_rig)
     anchor = cad.T_rig[CAMERAS["zed_left"]]
     for c, frame in CAMERAS.items():

@@ -31,9 +31,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from platform_tools import atomic
-from platform_tools.frames import Pose, rotvec_to_matrix
-from platform_tools.progress import progress
+from platform_tools.rig import atomic
+from platform_tools.rig.frames import Pose, rotvec_to_matrix
+from platform_tools.rig.progress import progress
 
 from ..extrinsics.cad import CAMERAS, FrameTree, cad_frames
 from ..extrinsics.outputs import pose_dict

@@ -8,8 +8,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from platform_tools import atomic
-from platform_tools.progress import progress
+from platform_tools.rig import atomic
+from platform_tools.rig.progress import progress
 
 from .board import Board
 from .difficulty import Difficulty, level

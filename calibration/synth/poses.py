@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from platform_tools.frames import rotvec_to_matrix
+from platform_tools.rig.frames import rotvec_to_matrix
 
 from .board import Board
 from .difficulty import Difficulty

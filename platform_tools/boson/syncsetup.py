@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass, field
 from enum import IntEnum
 from typing import Any
 
-from ..telemetry.decode import EXPECTED_LOCATION
+from platform_tools.boson.telemetry import EXPECTED_LOCATION
 from . import commands as C
 from .client import BosonClient
 from .codes import BosonError, CameraError, IdentityMismatch
@@ -40,7 +40,7 @@ class Setting:
 SETTINGS: dict[str, Setting] = {
     "ext_sync_mode": Setting("ext_sync_mode", C.GET_EXT_SYNC, C.SET_EXT_SYNC),
     "display_mode": Setting("display_mode", C.GET_DISPLAY_MODE, C.SET_DISPLAY_MODE),
-    # telemetry rows carry the FFC status the recorder needs (platform_tools.telemetry); they go
+    # telemetry rows carry the FFC status the recorder needs (platform_tools.boson.telemetry); they go
     # where the decoder expects them before they are switched on
     "telemetry_state": Setting("telemetry_state", C.GET_TELEMETRY, C.SET_TELEMETRY, before_set=(
         (C.SET_TELEMETRY_LOCATION, C.TelemetryLocation[EXPECTED_LOCATION.upper()]),)),

@@ -17,14 +17,14 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from .. import atomic
+from platform_tools.rig import atomic
 from ..boson import commands as C
 from ..boson import discovery, syncsetup
 from ..boson.client import BosonClient, Timeouts
 from ..boson.codes import BosonError, CameraError
 from ..boson.transport import SerialTransport
-from .common import (CheckFailed, UserError, add_output_options, add_rig_options, error, print_json,
-                     rig_from_args)
+from platform_tools.rig.conventions import (CheckFailed, UserError, add_output_options, add_rig_options, error,
+    print_json, rig_from_args)
 
 
 # ---------------------------------------------------------------------------- shared options

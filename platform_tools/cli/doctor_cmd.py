@@ -6,8 +6,9 @@ import signal
 import threading
 from pathlib import Path
 
-from ..device.preflight import Report, run_preflight
-from .common import CheckFailed, add_output_options, add_rig_options, print_json, rig_from_args
+from firmware.device.preflight import Report, run_preflight
+from platform_tools.rig.conventions import (CheckFailed, add_output_options, add_rig_options, print_json,
+    rig_from_args)
 
 
 def add_preflight_options(p: argparse.ArgumentParser) -> None:

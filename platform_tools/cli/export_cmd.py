@@ -4,7 +4,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import UserError, add_output_options, add_rig_options, print_json, rig_from_args
+from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, print_json,
+    rig_from_args)
 
 
 def register(sub: argparse._SubParsersAction) -> None:

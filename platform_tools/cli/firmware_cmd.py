@@ -5,9 +5,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..firmware.checks import FAILED, SKIPPED, Check, run_checks
-from ..firmware.render import write
-from .common import CheckFailed, UserError, add_output_options, add_rig_options, print_json, rig_from_args
+from firmware.checks import FAILED, SKIPPED, Check, run_checks
+from firmware.render import write
+from platform_tools.rig.conventions import (CheckFailed, UserError, add_output_options, add_rig_options,
+    print_json, rig_from_args)
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Sequence
 
-from .common import dispatch, tool_parser
+from platform_tools.rig.conventions import dispatch, tool_parser
 from . import boson_cmd, doctor_cmd, export_cmd, firmware_cmd, record_cmd, rig_cmd, simulate_cmd, synccheck_cmd
 
 #: subcommand modules, in the order --help lists them

@@ -7,12 +7,12 @@ import signal
 import threading
 from pathlib import Path
 
-from ..device.bagproc import backend_from_spec
-from ..device.button import Button
-from ..device.gpio import GpioError, open_gpio
-from ..device.preflight import run_preflight
-from ..device.recorder import ButtonLoop, Recorder
-from .common import UserError, add_output_options, add_rig_options, rig_from_args
+from firmware.device.bagproc import backend_from_spec
+from firmware.device.button import Button
+from firmware.device.gpio import GpioError, open_gpio
+from firmware.device.preflight import run_preflight
+from firmware.device.recorder import ButtonLoop, Recorder
+from platform_tools.rig.conventions import UserError, add_output_options, add_rig_options, rig_from_args
 from .doctor_cmd import add_preflight_options
 
 log = logging.getLogger("platform_tools.recorder")

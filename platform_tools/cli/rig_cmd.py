@@ -8,9 +8,10 @@ from pathlib import Path
 
 import yaml
 
-from .. import atomic
+from platform_tools.rig import atomic
 from ..rig import Rig, RigError, frames_table, load_rig
-from .common import EXIT_BAD_INPUT, add_output_options, add_rig_options, print_json, rig_from_args
+from platform_tools.rig.conventions import (EXIT_BAD_INPUT, add_output_options, add_rig_options, print_json,
+    rig_from_args)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -71,7 +72,7 @@ def cmd_show(args: argparse.Namespace) -> int:
     data = rig.to_data()
     if args.section:
         if args.section not in data:
-            from .common import UserError
+            from platform_tools.rig.conventions import UserError
             raise UserError(f"--section {args.section}: no such section; the rig has {', '.join(data)}")
         data = {args.section: data[args.section]}
     doc = {"rig": data, "derived": derived(rig)}

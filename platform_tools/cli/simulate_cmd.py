@@ -6,7 +6,8 @@ from pathlib import Path
 
 from ..sim.timeline import SimParams
 from ..sim.writer import simulate
-from .common import UserError, add_output_options, add_rig_options, print_json, rig_from_args
+from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, print_json,
+    rig_from_args)
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -6,7 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import UserError, add_output_options, add_rig_options, print_json, rig_from_args
+from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, print_json,
+    rig_from_args)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,7 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _plots(report: dict, out: Path, rig) -> list[str]:
     import json
 
-    from .. import atomic
+    from platform_tools.rig import atomic
     from ..dataset import svgplot
     period_ms = 1000.0 / rig.desc.sync.rate_hz
     factor = report["limits"]["drop_interval_factor"]

@@ -1,4 +1,4 @@
-"""Camera models for the export: the rig's nominal models (calibration.nominal: lens as designed,
+"""Camera models for the export: the rig's nominal models (platform_tools.rig.nominal: lens as designed,
 CAD-derived extrinsics) or a calibrated set of mrcal ``.cameramodel`` files, as ``calibrate nominal``
 names them (``zed_x_left.cameramodel``, ``thermal_left.cameramodel``, ``thermal_right.cameramodel``;
 all posed in one reference frame).
@@ -85,14 +85,13 @@ def load_calibration(rig, path: Path | None = None) -> Calibration:
     import mrcal
     texts, cams = [], {}
     if path is None:
-        from calibration.nominal import nominal_cameras, to_cameramodel
-        for cam in nominal_cameras(rig):
-            if cam.name in FILES:
-                m = to_cameramodel(cam)
+        from platform_tools.rig.nominal import nominal_cameras
+        for name, m in nominal_cameras(rig).items():
+            if name in FILES:
                 buf = io.StringIO()
                 m.write(buf)
                 texts.append(buf.getvalue())
-                cams[cam.name] = _from_model(cam.name, m)
+                cams[name] = _from_model(name, m)
         source = f"nominal (rig {rig.desc.name} {rig.hash[:12]})"
     else:
         path = Path(path)

@@ -39,9 +39,9 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from .. import atomic
-from ..progress import progress
-from ..telemetry import telemetry_rows_present
+from platform_tools.rig import atomic
+from platform_tools.rig.progress import progress
+from platform_tools.boson.telemetry import telemetry_rows_present
 from . import thermal8
 from .calib import FRAME_OF, Calibration, CalibrationError, CameraCal, load_calibration
 from .pairing import THERMAL, plan
@@ -304,7 +304,7 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
         th_spec = rig.camera_model(rig.desc.sensors.thermal.camera_model)
         w, h = sizes["thermal_left"]
         rows = rig.desc.on_device.thermal_telemetry_rows
-        # Boson telemetry rows below the image (platform_tools.telemetry): not part of the picture
+        # Boson telemetry rows below the image (platform_tools.boson.telemetry): not part of the picture
         th_h = h - rows if telemetry_rows_present(w, h, th_spec.width_px, th_spec.height_px, rows) else h
         if sizes["zed_depth"] != sizes["zed_left"]:
             raise ExportError(f"{rec.path}: the depth is {sizes['zed_depth'][0]}x{sizes['zed_depth'][1]}, the ZED "

@@ -6,7 +6,7 @@ header stamp (read straight from the CDR bytes: encapsulation header, then ``int
 ``uint32 nanosec``), its log time (to find it again) and, for thermal images, whether its pixels
 repeat the previous frame's (a frozen frame: FFC). The thermal status topic is decoded (it is small).
 When a thermal camera has no status messages, its FFC state comes from the Boson telemetry rows of
-its frames instead (``platform_tools.telemetry``; a frozen frame is then judged on the image rows
+its frames instead (``platform_tools.boson.telemetry``; a frozen frame is then judged on the image rows
 only: the telemetry keeps changing during an FFC).
 
 Bad input ends in :class:`RecordingError` with one line: a truncated MCAP (no index: the recorder
@@ -139,7 +139,7 @@ def resolve_files(files: list[Path], recover: bool) -> tuple[list[Path], list[st
             raise RecordingError(
                 f"{f}: truncated MCAP (no index: the recorder was killed or lost power); run again with "
                 f"--recover to salvage its readable messages into {copy.name} (the original is kept)")
-        from ..device.mcapcheck import recover as mcap_recover
+        from firmware.device.mcapcheck import recover as mcap_recover
         rec = mcap_recover(f)
         out.append(Path(rec.path))
         notes.append(f"{f.name}: truncated; recovered {rec.messages} messages into {copy.name}"
@@ -185,7 +185,7 @@ def image_layout(data: bytes) -> tuple[int, int, int, int]:
 
 def _telemetry_rows(rig, width: int, height: int) -> int:
     """How many telemetry rows a thermal frame of this size carries (0: none)."""
-    from ..telemetry import telemetry_rows_present
+    from platform_tools.boson.telemetry import telemetry_rows_present
     rows = rig.desc.on_device.thermal_telemetry_rows
     model = rig.camera_model(rig.desc.sensors.thermal.camera_model)
     return rows if telemetry_rows_present(width, height, model.width_px, model.height_px, rows) else 0
@@ -258,7 +258,7 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS) -
 def _thermal_tail(data: bytes, stream: str, stamp: int, rig, tele_rows: dict, from_telemetry: dict) -> bytes:
     """The last 4 KiB of a thermal frame's image rows (to find frozen frames), after recording the
     FFC state of its telemetry rows, when it has some, in ``from_telemetry``."""
-    from ..telemetry import TelemetryError, decode_image_data
+    from platform_tools.boson.telemetry import TelemetryError, decode_image_data
     try:
         height, width, step, off = image_layout(data)
     except (struct.error, ValueError, IndexError):

@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Sequence
 
-from ..problems import InputProblems
+from platform_tools.rig.problems import InputProblems
 from .model import Rig
 from .overrides import Override, OverrideError, apply_overrides, override_for, parse_override
 from .rules import check_rules

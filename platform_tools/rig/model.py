@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator
 
-from ..frames import T_BODY_OPTICAL, Pose
+from platform_tools.rig.frames import T_BODY_OPTICAL, Pose
 from .schema import CameraModelSpec, Confidence, Part, RigDescription, Sourced
 from .typed import KeyPath, format_path, to_data
 

@@ -5,7 +5,7 @@ a back wall, a warm box that moves sideways over time and a near box in front of
 ZED and the thermal cameras, 46 mm apart vertically, see different occlusions). Everything above the
 wall is sky: no hit, so the ZED depth is NaN there (and +inf beyond the depth range).
 
-Each camera is the nominal mrcal model of ``calibration.nominal`` (lens and pose from the rig
+Each camera is the nominal mrcal model of ``platform_tools.rig.nominal`` (lens and pose from the rig
 description), scaled to the recorded image size. Rendering casts one ray per pixel centre
 (``mrcal.unproject``), intersects the boxes and keeps the nearest hit; the ZED depth is the Z of the
 hit in the ZED left optical frame, in metres, as zed-ros2-wrapper publishes it.
@@ -86,15 +86,12 @@ class SimCamera:
 
 
 def sim_camera(rig, frame: str, width: int, height: int) -> SimCamera:
-    from calibration.nominal import nominal_cameras
-    cam = next(c for c in nominal_cameras(rig) if c.name == frame)
-    W, H = cam.imagersize
-    sx, sy = width / W, height / H
-    fx, fy, cx, cy = cam.intrinsics
-    # a resized image: pixel centres map as (q + 0.5) * s - 0.5
-    k = np.array([fx * sx, fy * sy, (cx + 0.5) * sx - 0.5, (cy + 0.5) * sy - 0.5])
+    from platform_tools.rig.cameras import scaled
+    from platform_tools.rig.nominal import nominal_camera
+    model = scaled(nominal_camera(rig, frame), (width, height), what=frame)
+    lensmodel, k = model.intrinsics()
     T = rig.frame(frame)
-    return SimCamera(frame, cam.lensmodel, k, width, height, np.array(T.R), np.array(T.t))
+    return SimCamera(frame, lensmodel, k, width, height, np.array(T.R), np.array(T.t))
 
 
 # ----------------------------------------------------------------------------- ray casting

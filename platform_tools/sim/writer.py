@@ -10,10 +10,10 @@ import numpy as np
 import yaml
 from mcap_ros2.writer import Writer
 
-from .. import atomic
-from ..progress import progress
+from platform_tools.rig import atomic
+from platform_tools.rig.progress import progress
 from ..rig import Rig
-from ..telemetry import decode as telemetry
+from platform_tools.boson import telemetry
 from . import geometry, msgs
 from .timeline import NS, SimParams, Timeline, build, ffc_state
 

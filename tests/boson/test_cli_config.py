@@ -37,7 +37,7 @@ def test_slave_on_both_cameras_then_idempotent(cli, pair):
                                   {"setting": "telemetry_state", "from": "disabled", "to": "enabled"}]
         assert cam["after"] == {"ext_sync_mode": "slave", "telemetry_state": "enabled"}
     assert sets(left) == sets(right) == SLAVE
-    for emu in (left, right):   # rows placed where platform_tools.telemetry reads them, before switching on
+    for emu in (left, right):   # rows placed where platform_tools.boson.telemetry reads them, before switching on
         assert emu.state.settings["telemetry_location"] == C.TelemetryLocation.BOTTOM
         assert emu.state.settings["telemetry_state"] == C.TelemetryState.ENABLED
     assert left.state.flash["ext_sync_mode"] == DISABLE and left.state.flash_writes == 0   # not persisted

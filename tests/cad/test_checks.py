@@ -25,7 +25,7 @@ def test_intended_overlaps_are_measured_not_assumed(asm, results):
 
 def _with_node_moved(asm, name, dx=0.0, dy=0.0, dz=0.0):
     import numpy as np
-    from platform_tools.frames import Pose
+    from platform_tools.rig.frames import Pose
     nodes = []
     for n in asm.nodes:
         if n.name == name:

@@ -7,7 +7,7 @@ import cadquery as cq
 import pytest
 
 from cad.export import export
-from platform_tools.atomic import OutputDir
+from platform_tools.rig.atomic import OutputDir
 
 REPO = Path(__file__).resolve().parents[2]
 

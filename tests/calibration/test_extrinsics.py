@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 from calibration.extrinsics.cad import CAMERAS, IMU, cad_frames
-from platform_tools.frames import Pose, rpy_to_matrix
+from platform_tools.rig.frames import Pose, rpy_to_matrix
 from platform_tools.rig import load_rig
 
 REPO = Path(__file__).resolve().parents[2]

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from calibration.extrinsics.cad import CAMERAS
-from platform_tools.frames import Pose
+from platform_tools.rig.frames import Pose
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -108,7 +108,7 @@ def _rms_in_valid_region(model, truth) -> float:
 
 def test_exit_code_follows_the_grade():
     from calibration.report.verdict import Verdict
-    from calibration.thermal_cmd import accepted
+    from calibration.commands.thermal import accepted
     for grade, default, whole in [("trusted", True, True), ("trusted-within-region", True, False),
                                   ("not-trusted", False, False)]:
         v = Verdict(grade)

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from platform_tools.device.bagproc import FakeBackend
-from platform_tools.device.preflight import run_preflight
-from platform_tools.device.recorder import Recorder
+from firmware.device.bagproc import FakeBackend
+from firmware.device.preflight import run_preflight
+from firmware.device.recorder import Recorder
 from platform_tools.rig import load_rig
 
 SHM = Path("/dev/shm")

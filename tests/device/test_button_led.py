@@ -4,8 +4,8 @@ from __future__ import annotations
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from platform_tools.device import led
-from platform_tools.device.button import Button, Press
+from firmware.device import led
+from firmware.device.button import Button, Press
 
 DT = 0.005   # 200 Hz sampling, as the service loop (10 ms) or faster
 

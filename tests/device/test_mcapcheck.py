@@ -9,13 +9,13 @@ import time
 
 import pytest
 
-from platform_tools.device import mcapcheck
+from firmware.device import mcapcheck
 
 
 @pytest.fixture(scope="module")
 def clean_bag(tmp_path_factory):
     folder = tmp_path_factory.mktemp("bag") / "b"
-    p = subprocess.Popen([sys.executable, "-m", "platform_tools.device.fake_recorder", "-o", str(folder), "--misbehave", "fill-disk",
+    p = subprocess.Popen([sys.executable, "-m", "platform_tools.sim.fake_recorder", "-o", str(folder), "--misbehave", "fill-disk",
                           "--fill-mb-s", "4", "/a", "/b"],  # 1 MiB messages: many chunks
                          stderr=subprocess.DEVNULL)
     time.sleep(1.5)

@@ -9,11 +9,11 @@ import signal
 import time
 
 
-from platform_tools.device import led, mcapcheck, metadata
-from platform_tools.device.button import Button, Press
-from platform_tools.device.gpio import MemoryGpio
-from platform_tools.device.recorder import ButtonLoop, Recorder, State
-from platform_tools.device.storage import free_bytes
+from firmware.device import led, mcapcheck, metadata
+from firmware.device.button import Button, Press
+from firmware.device.gpio import MemoryGpio
+from firmware.device.recorder import ButtonLoop, Recorder, State
+from firmware.device.storage import free_bytes
 
 
 def wait_for(cond, timeout=15.0, step=0.02):

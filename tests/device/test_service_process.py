@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from platform_tools.device import mcapcheck
+from firmware.device import mcapcheck
 
 
 def wait_for(cond, timeout=20.0):

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from platform_tools.firmware.checks import FAILED, OK, SKIPPED, run_checks
-from platform_tools.firmware.render import render, write
+from firmware.checks import FAILED, OK, SKIPPED, run_checks
+from firmware.render import render, write
 from platform_tools.rig import load_rig
 
 SNAPSHOTS = Path(__file__).parent / "snapshots"
@@ -90,7 +90,7 @@ def test_data_mount_reaches_unit_compose_and_start_script():
 def test_baseline_reaches_the_static_transforms(tmp_path):
     rig = load_rig(None, ["sensors.thermal.baseline_mm=150"])
     write(rig, tmp_path / "fw")
-    from platform_tools.firmware.launch_stub import load_launch_file
+    from firmware.launch_stub import load_launch_file
     nodes = load_launch_file(tmp_path / "fw" / "launch" / "zed.launch.py").entities
     tf = {n.kwargs["name"]: n.kwargs["arguments"] for n in nodes if n.kwargs.get("name", "").startswith("tf_")}
     y = lambda args: float(args[args.index("--y") + 1])  # noqa: E731
@@ -166,7 +166,7 @@ def test_a_bad_rig_value_is_one_line_and_exit_2(platform_tools, tmp_path):
     (("compose.yaml", "    init: true", "    init: true\n    bogus_key: 1"), "compose valid"),
     (("docker/tools/Dockerfile", "COPY src/rgbt-rig", "COPY src/not-there"), "dockerfiles"),
     (("docker/zed/Dockerfile", "l4t-jetpack:r36.4.0", "l4t-jetpack:r35.4.1"), "dockerfiles"),
-    (("launch/thermal.launch.py", '"platform_tools.telemetry.node"', '"platform_tools.telemetry.nod"'),
+    (("launch/thermal.launch.py", '"firmware.device.ffc_node"', '"platform_tools.boson.telemetry.nod"'),
      "launch files"),
 ])
 def test_check_command_catches_a_tampered_file(platform_tools, tmp_path, edit, check):
@@ -223,12 +223,12 @@ def test_images_that_cannot_match_the_orin_are_one_line_and_exit_2(platform_tool
 
 
 def test_the_status_publisher_is_launched_for_each_side(default_render):
-    from platform_tools.firmware.launch_stub import load_launch_file
+    from firmware.launch_stub import load_launch_file
     desc = load_launch_file(default_render / "launch" / "thermal.launch.py")
     fn = next(e for e in desc.entities if hasattr(e, "run"))
     for side in ("left", "right"):
         (proc,) = [e for e in fn.run({"side": side}) if e.kwargs.get("name") == f"thermal_{side}_status"]
         cmd = proc.kwargs["cmd"]
-        assert cmd[:3] == ["python3", "-m", "platform_tools.telemetry.node"]
+        assert cmd[:3] == ["python3", "-m", "firmware.device.ffc_node"]
         assert f"image_topic:=/thermal/{side}/image_raw" in cmd and f"status_topic:=/thermal/{side}/status" in cmd
         assert "telemetry_rows:=2" in cmd

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import yaml
 
-from platform_tools.frames import T_BODY_OPTICAL
+from platform_tools.rig.frames import T_BODY_OPTICAL
 from platform_tools.rig import load_rig
 
 

@@ -114,7 +114,7 @@ def test_bad_duration_is_one_line_exit_2(platform_tools, tmp_path):
 def test_telemetry_rows_agree_with_the_trigger_and_the_status_topic(sim):
     """The Bosons' telemetry: a counter of trigger pulses (dropped frames included), the FFC state the
     status topic publishes, and the counter at the start of the last FFC."""
-    from platform_tools.telemetry import decode_frame
+    from platform_tools.boson.telemetry import decode_frame
     rig, _, truth, msgs = sim
     t = rig.desc.on_device.topics
     rows = truth["telemetry"]["rows"]

@@ -12,8 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from platform_tools.boson.commands import FfcStatus
-from platform_tools.telemetry import decode as D
-from platform_tools.telemetry.status import ERROR, OK, WARN, StatusTracker
+from platform_tools.boson import telemetry as D
+from firmware.device.ffc_status import ERROR, OK, WARN, StatusTracker
 
 LINE = 1280   # one 640-pixel Y16 row
 U32 = st.integers(0, 2**32 - 1)

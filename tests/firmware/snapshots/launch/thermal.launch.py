@@ -2,7 +2,7 @@
 """One Boson of rig rgbt-handheld (side:=left or side:=right): usb_cam streaming Y16 as mono16
 (640x514, the last 2 rows telemetry) at 30.0 Hz,
 triggered by the zed_link_quad in slave mode; and the FFC status publisher
-(platform_tools.telemetry.node) reading the telemetry rows of that image into the status topic."""
+(firmware.device.ffc_node) reading the telemetry rows of that image into the status topic."""
 import os
 
 from launch import LaunchDescription
@@ -31,7 +31,7 @@ def camera_node(context):
     # a plain Python module of this repository (pip-installed in the image), not an ament package
     status = ExecuteProcess(
         name=f"thermal_{side}_status", output="screen",
-        cmd=["python3", "-m", "platform_tools.telemetry.node", "--ros-args",
+        cmd=["python3", "-m", "firmware.device.ffc_node", "--ros-args",
              "-r", f"__node:=thermal_{side}_status",
              "-p", f"image_topic:={topic}", "-p", f"status_topic:={status_topic}",
              "-p", f"camera_name:=thermal_{side}", "-p", f"hardware_id:='{serial}'",  # quoted: a string, not an int

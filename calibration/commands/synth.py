@@ -5,10 +5,11 @@ import argparse
 import re
 from pathlib import Path
 
-from platform_tools.cli.common import UserError, add_output_options, add_rig_options, print_json, rig_from_args
+from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, print_json,
+    rig_from_args)
 
-from .synth import DIFFICULTIES, render_dataset
-from .synth.lens import nominal_thermal_lens
+from calibration.synth import DIFFICULTIES, render_dataset
+from calibration.synth.lens import nominal_thermal_lens
 
 
 def parse_board(text: str) -> tuple[int, int]:

@@ -7,13 +7,13 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from ..boson import commands as C
-from ..boson import discovery
-from ..boson.client import BosonClient
-from ..boson.codes import BosonError
-from ..boson.transport import SerialTransport
-from ..rig import Rig
-from .preflight import FAILED, OK, SKIPPED, SYNC_NAMES, TRIGGER_TOLERANCE, Check
+from platform_tools.boson import commands as C
+from platform_tools.boson import discovery
+from platform_tools.boson.client import BosonClient
+from platform_tools.boson.codes import BosonError
+from platform_tools.boson.transport import SerialTransport
+from platform_tools.rig import Rig
+from firmware.device.preflight import FAILED, OK, SKIPPED, SYNC_NAMES, TRIGGER_TOLERANCE, Check
 
 
 def _port(rig: Rig, side: str, dev_dir: Path, found) -> tuple[str, int | None]:

@@ -1,6 +1,6 @@
 """The pure part of the FFC status publisher: from each thermal frame to the status message.
 
-The node (:mod:`platform_tools.telemetry.node`, on the device only) hands every received image here;
+The node (:mod:`firmware.device.ffc_node`, on the device only) hands every received image here;
 this module decides what to publish, as the plain dict form of a diagnostic_msgs/DiagnosticArray
 (the form :func:`platform_tools.sim.msgs.diagnostic` builds, and what the recorder records on
 ``on_device.topics.thermal_*_status``). The header stamp is the image's, so each status lines up
@@ -16,8 +16,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..boson.commands import FfcStatus
-from .decode import EXPECTED_LOCATION, Telemetry, TelemetryError, decode_image_data
+from platform_tools.boson.commands import FfcStatus
+from platform_tools.boson.telemetry import EXPECTED_LOCATION, Telemetry, TelemetryError, decode_image_data
 
 OK, WARN, ERROR = 0, 1, 2
 

@@ -17,7 +17,7 @@ from mcap.records import Channel, Chunk, Message, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
 
-from ..atomic import open_atomic
+from platform_tools.rig.atomic import open_atomic
 
 RECOVERED_SUFFIX = ".recovered.mcap"
 

@@ -18,9 +18,9 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..checks import FAILED, OK, SKIPPED, Check
-from ..rig import Rig
-from .storage import GB, free_bytes, mount_point
+from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
+from platform_tools.rig import Rig
+from firmware.device.storage import GB, free_bytes, mount_point
 
 SYNC_NAMES = {"slave": "SLAVE", "master": "MASTER", "disabled": "DISABLE"}
 TRIGGER_TOLERANCE = 0.2
@@ -76,7 +76,7 @@ def check_video_nodes(rig: Rig, dev_dir: Path) -> Check:
 
 
 def _boson_checks(rig: Rig, dev_dir: Path, report: Report) -> list[Check]:
-    from . import bosonprobe
+    from firmware.device import bosonprobe
     return bosonprobe.checks(rig, dev_dir, report.cameras)
 
 

@@ -2,12 +2,12 @@
 
 Runs in the thermal container, started by launch/thermal.launch.py next to usb_cam:
 
-    python3 -m platform_tools.telemetry.node --ros-args -r __node:=thermal_left_status \\
+    python3 -m firmware.device.ffc_node --ros-args -r __node:=thermal_left_status \\
         -p image_topic:=/thermal/left/image_raw -p status_topic:=/thermal/left/status \\
         -p telemetry_rows:=2 -p hardware_id:=93588
 
 Subscribes to the mono16 image, publishes diagnostic_msgs/DiagnosticArray on the status topic (the
-one the recorder records). All decisions are in :mod:`platform_tools.telemetry.status`; this module
+one the recorder records). All decisions are in :mod:`firmware.device.ffc_status`; this module
 only moves messages, and imports rclpy: it is imported on the device only.
 """
 from __future__ import annotations
@@ -20,7 +20,7 @@ from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Image
 
-from .status import StatusTracker
+from firmware.device.ffc_status import StatusTracker
 
 
 def to_msg(d: dict) -> DiagnosticArray:

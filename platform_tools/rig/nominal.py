@@ -7,31 +7,24 @@ is made from before any distortion is added. Projections:
 - ``fisheye`` cameras (the Boson with its 95 deg lens): ``LENSMODEL_STEREOGRAPHIC`` with the same f
   (r = 2 f tan(theta/2)), which agrees with a pinhole at the centre and stays finite to 180 deg.
 
-Extrinsics are written as mrcal expects: ``rt_fromref`` maps the reference frame into the camera's
-optical frame; the reference is the rig frame, in metres.
+Each is the project's one camera value, an ``mrcal.cameramodel`` (:mod:`platform_tools.rig.cameras`), whose
+``rt_fromref`` maps the reference frame into the camera's optical frame; the reference is the rig frame, in
+metres.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from platform_tools.rig import Rig
+from platform_tools.rig.cameras import camera_model
+from platform_tools.rig.model import Rig
 
 LENSMODEL_FOR_PROJECTION = {"pinhole": "LENSMODEL_PINHOLE", "fisheye": "LENSMODEL_STEREOGRAPHIC"}
 
 
-@dataclass(frozen=True)
-class NominalCamera:
-    name: str                 # the sensor frame, e.g. thermal_left_optical
-    lensmodel: str
-    intrinsics: np.ndarray    # fx fy cx cy
-    imagersize: tuple[int, int]
-    rt_cam_rig_m: np.ndarray  # mrcal rt_fromref (rig frame -> camera optical frame), metres
-
-
-def nominal_cameras(rig: Rig) -> list[NominalCamera]:
-    cams = []
+def nominal_cameras(rig: Rig) -> dict:
+    """Optical frame name (e.g. ``thermal_left_optical``) -> its nominal ``mrcal.cameramodel``, in the order of
+    the rig's sensor frames."""
+    cams = {}
     for frame in rig.sensor_frames().values():
         if not frame.optical or frame.camera_model is None:
             continue
@@ -39,12 +32,14 @@ def nominal_cameras(rig: Rig) -> list[NominalCamera]:
         f = rig.focal_px(spec)
         w, h = spec.width_px, spec.height_px
         intrinsics = np.array([f, f, (w - 1) / 2.0, (h - 1) / 2.0])
-        rt = frame.T_rig.inverse().rt(metres=True)
-        cams.append(NominalCamera(frame.name, LENSMODEL_FOR_PROJECTION[spec.projection], intrinsics, (w, h), rt))
+        cams[frame.name] = camera_model(LENSMODEL_FOR_PROJECTION[spec.projection], intrinsics, (w, h),
+                                        frame.T_rig.inverse().rt(metres=True))
     return cams
 
 
-def to_cameramodel(cam: NominalCamera):
-    import mrcal
-    return mrcal.cameramodel(intrinsics=(cam.lensmodel, cam.intrinsics), imagersize=cam.imagersize,
-                             extrinsics_rt_fromref=cam.rt_cam_rig_m)
+def nominal_camera(rig: Rig, frame: str):
+    """The nominal ``mrcal.cameramodel`` of one optical frame; KeyError naming the frames there are."""
+    cams = nominal_cameras(rig)
+    if frame not in cams:
+        raise KeyError(f"{frame}: no such camera; the rig has {', '.join(cams)}")
+    return cams[frame]

@@ -15,13 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
-from platform_tools import atomic
-from platform_tools.cli.common import (CheckFailed, UserError, add_output_options, add_rig_options, print_json,
-                                       rig_from_args)
+from platform_tools.rig import atomic
+from platform_tools.rig.conventions import (CheckFailed, UserError, add_output_options, add_rig_options,
+    print_json, rig_from_args)
 
-from .quiet import quiet_stderr
-from .report.verdict import MIN_TRUSTED_SHARE, TRUSTED, Verdict
-from .synth_cmd import parse_board
+from calibration.quiet import quiet_stderr
+from calibration.report.verdict import MIN_TRUSTED_SHARE, TRUSTED, Verdict
+from calibration.commands.synth import parse_board
 
 log = logging.getLogger("calibration.thermal")
 
@@ -73,9 +73,9 @@ def _check_square(square: float) -> float:
 def detect(images: str, board: tuple[int, int], square_m: float):
     """Detection over the images: (observations, corners.vnl text). Corrupt files are bad input;
     saturated or blank images are skipped and named (all of them unusable is bad input too)."""
-    from .corners_io import BoardCorners, format_corners
-    from .detect import ImageError, detect_files, list_images
-    from .intrinsics.observations import from_detections
+    from calibration.corners_io import BoardCorners, format_corners
+    from calibration.detect import ImageError, detect_files, list_images
+    from calibration.intrinsics.observations import from_detections
     try:
         files = list_images(images)
     except ImageError as exc:
@@ -115,9 +115,9 @@ def detect(images: str, board: tuple[int, int], square_m: float):
 
 
 def solve(obs, *, solver: str, lens_model: str | None, focal_px: float):
-    from .intrinsics import SolveError
-    from .intrinsics import mrcal_solver, opencv_solver
-    from .intrinsics.lensmodels import LensModelError
+    from calibration.intrinsics import SolveError
+    from calibration.intrinsics import mrcal_solver, opencv_solver
+    from calibration.intrinsics.lensmodels import LensModelError
     try:
         if solver == "opencv":
             if lens_model is not None:
@@ -131,14 +131,14 @@ def solve(obs, *, solver: str, lens_model: str | None, focal_px: float):
 
 
 def cmd_thermal(args: argparse.Namespace) -> int:
-    from .intrinsics import outputs
+    from calibration.intrinsics import outputs
     rig = rig_from_args(args)
     board = parse_board(args.board)
     square = _check_square(args.square)
     spec = rig.camera_model(rig.desc.sensors.thermal.camera_model)
     focal = rig.focal_px(spec)
     if args.lens_model is not None:     # a bad name is bad input before any work is done
-        from .intrinsics.lensmodels import LensModelError, resolve
+        from calibration.intrinsics.lensmodels import LensModelError, resolve
         try:
             resolve(args.lens_model, (spec.width_px, spec.height_px), 100.0)
         except LensModelError as exc:

@@ -1,6 +1,6 @@
 """A stand-in for `ros2 bag record` that writes a real MCAP and misbehaves on request.
 
-    python -m platform_tools.device.fake_recorder -o BAG [--misbehave MODE] TOPIC...
+    python -m platform_tools.sim.fake_recorder -o BAG [--misbehave MODE] TOPIC...
 
 Like rosbag2 it creates the folder BAG, writes BAG/<name>_0.mcap (ROS 2 CDR messages: a small
 mono16 image per topic at --rate-hz), splits by size, and on SIGINT finishes the file (summary and
@@ -24,7 +24,7 @@ import numpy as np
 import yaml
 from mcap_ros2.writer import Writer
 
-from ..sim import msgs
+from platform_tools.sim import msgs
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:

@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from platform_tools import atomic
-from platform_tools.cli.common import UserError, add_output_options, add_rig_options, print_json, rig_from_args
+from platform_tools.rig import atomic
+from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, print_json,
+    rig_from_args)
 
 DEFAULT_OUT = Path("build/calibration/extrinsics")
 
@@ -30,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def frames_or_user_error(rig):
-    from .extrinsics.cad import RigGeometryError, cad_frames
+    from calibration.extrinsics.cad import RigGeometryError, cad_frames
     try:
         return cad_frames(rig)
     except RigGeometryError as exc:
@@ -38,8 +39,8 @@ def frames_or_user_error(rig):
 
 
 def cmd_extrinsics(args: argparse.Namespace) -> int:
-    from .extrinsics.cad import CAMERAS, IMU
-    from .extrinsics.outputs import all_files, nominal_lenses
+    from calibration.extrinsics.cad import CAMERAS, IMU
+    from calibration.extrinsics.outputs import all_files, nominal_lenses
     rig = rig_from_args(args)
     tree = frames_or_user_error(rig)
     files = all_files(tree, nominal_lenses(rig), rig, source="CAD model (cad.assembly placements)")

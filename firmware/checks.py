@@ -13,10 +13,10 @@ from pathlib import Path, PurePosixPath
 
 import yaml
 
-from ..checks import FAILED, OK, SKIPPED, Check
-from ..rig import Rig
-from .context import L4T_RELEASES, build_context
-from .launch_stub import ExecuteProcess, Node, load_launch_file
+from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
+from platform_tools.rig import Rig
+from firmware.context import L4T_RELEASES, build_context
+from firmware.launch_stub import ExecuteProcess, Node, load_launch_file
 
 
 
@@ -158,7 +158,7 @@ def check_launch(folder: Path, rig: Rig) -> Check:
             cmd = pub[0].kwargs.get("cmd", []) if len(pub) == 1 else []
             want = [f"image_topic:={t['topic']}", f"status_topic:={t['status_topic']}",
                     f"telemetry_rows:={t['telemetry_rows']}"]
-            if "platform_tools.telemetry.node" not in cmd or any(w not in cmd for w in want):
+            if "firmware.device.ffc_node" not in cmd or any(w not in cmd for w in want):
                 problems.append(f"{t['name']}: no FFC status publisher from {t['topic']} to {t['status_topic']}")
     tfs = [n for n in nodes if n.kwargs.get("executable") == "static_transform_publisher"]
     if len(tfs) != len(ctx["static_tfs"]):

@@ -10,11 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
-from platform_tools import atomic
-from platform_tools.cli.common import (CheckFailed, UserError, add_output_options, add_rig_options, print_json,
-                                       rig_from_args)
+from platform_tools.rig import atomic
+from platform_tools.rig.conventions import (CheckFailed, UserError, add_output_options, add_rig_options,
+    print_json, rig_from_args)
 
-from .synth_cmd import parse_board
+from calibration.commands.synth import parse_board
 
 log = logging.getLogger("calibration.rig")
 DEPTHS_M = (1.5, 5.0)
@@ -53,7 +53,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _zed_seed(rig, short: str, size: tuple[int, int], models: Path | None):
-    from .extrinsics.outputs import CameraIntrinsics, nominal_lenses
+    from calibration.extrinsics.outputs import CameraIntrinsics, nominal_lenses
     if models is not None:
         import mrcal
         cands = [models / f"{short}.cameramodel", models / f"{short.replace('zed_', 'zed_x_')}.cameramodel"]
@@ -75,7 +75,7 @@ def _zed_seed(rig, short: str, size: tuple[int, int], models: Path | None):
     if abs(size[1] - H * s) > 1.0:
         raise UserError(f"{short}/ images are {size[0]}x{size[1]}, not the rig's {W}x{H} ZED at any scale; "
                         f"give --zed-models")
-    from .rigsynth.render import scaled_pinhole
+    from calibration.rigsynth.render import scaled_pinhole
     f, _, cx, cy = nom.intrinsics
     lens = scaled_pinhole(f, W, H, s)
     if abs(cx - (W - 1) / 2) > 1e-9 or abs(cy - (H - 1) / 2) > 1e-9:
@@ -84,8 +84,8 @@ def _zed_seed(rig, short: str, size: tuple[int, int], models: Path | None):
 
 
 def _thermal_seed(rig, short: str, size: tuple[int, int]):
-    from .extrinsics.outputs import CameraIntrinsics
-    from .synth.lens import nominal_thermal_lens
+    from calibration.extrinsics.outputs import CameraIntrinsics
+    from calibration.synth.lens import nominal_thermal_lens
     lens = nominal_thermal_lens(rig, short)
     if tuple(lens.imagersize) != tuple(size):
         raise UserError(f"{short}/ images are {size[0]}x{size[1]}; the rig's thermal camera is "
@@ -98,8 +98,8 @@ def reprojection(cad, sol, halves=None) -> dict:
     the CAD extrinsics against through the refined ones (px), and the refined extrinsics' own error,
     estimated by cross-validation (two solves on the even and the odd sets: half the difference of their
     extrinsics, both through the full solve's lenses)."""
-    from .extrinsics.cad import CAMERAS
-    from .extrinsics.solve import mapping_error_px, rgb_to_thermal_px
+    from calibration.extrinsics.cad import CAMERAS
+    from calibration.extrinsics.solve import mapping_error_px, rgb_to_thermal_px
     out = {}
     zl = CAMERAS["zed_left"]
     for th in ("thermal_left", "thermal_right"):
@@ -121,11 +121,11 @@ def reprojection(cad, sol, halves=None) -> dict:
 
 
 def cmd_rig(args: argparse.Namespace) -> int:
-    from .extrinsics.cad import CAMERAS
-    from .extrinsics.outputs import all_files, cameramodel_text, pose_dict
-    from .extrinsics.sets import SetError, detect_sets, find_sets, usable
-    from .extrinsics.solve import RigSolveError, difference, refined_tree, solve_rig
-    from .extrinsics_cmd import frames_or_user_error
+    from calibration.extrinsics.cad import CAMERAS
+    from calibration.extrinsics.outputs import all_files, cameramodel_text, pose_dict
+    from calibration.extrinsics.sets import SetError, detect_sets, find_sets, usable
+    from calibration.extrinsics.solve import RigSolveError, difference, refined_tree, solve_rig
+    from calibration.commands.extrinsics import frames_or_user_error
 
     rig = rig_from_args(args)
     board = parse_board(args.board)

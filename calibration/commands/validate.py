@@ -4,9 +4,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from platform_tools.cli.common import CheckFailed, UserError, add_output_options, print_json
+from platform_tools.rig.conventions import CheckFailed, UserError, add_output_options, print_json
 
-from .validate import compare_models
+from calibration.validate import compare_models
 
 # the accuracy targets on a "real" synthetic set (pixels)
 TARGET_RMS_PX = 0.1

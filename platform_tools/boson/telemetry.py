@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..boson.commands import FfcStatus
+from platform_tools.boson.commands import FfcStatus
 
 # ---------------------------------------------------------------- layout (verify on hardware)
 #: byte offset of the 8-byte status word (Elphel Boson640Telemetry.java STATUS_OFFSET)

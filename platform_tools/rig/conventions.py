@@ -13,10 +13,10 @@ import logging
 import sys
 from typing import Any, Callable, Sequence
 
-from .. import progress
-from ..atomic import OutputError
-from ..problems import InputProblems
-from ..rig import DEFAULT_RIG, Rig, load_rig
+from platform_tools.rig import progress
+from platform_tools.rig.atomic import OutputError
+from platform_tools.rig.problems import InputProblems
+from platform_tools.rig import DEFAULT_RIG, Rig, load_rig
 
 EXIT_OK = 0
 EXIT_CHECK_FAILED = 1

@@ -15,12 +15,12 @@ from typing import Callable
 import jinja2
 import yaml
 
-from .. import atomic
-from ..rig import Rig
-from .context import build_context
+from platform_tools.rig import atomic
+from platform_tools.rig import Rig
+from firmware.context import build_context
 
-REPO = Path(__file__).resolve().parents[2]
-TEMPLATES = REPO / "firmware" / "templates"
+REPO = Path(__file__).resolve().parents[1]
+TEMPLATES = Path(__file__).resolve().parent / "templates"
 #: what of this repository the thermal and tools images install (pip install --no-deps): the package
 #: metadata and the platform_tools package (not the workstation's cad/bom/calibration)
 SOURCE_FILES = ("pyproject.toml", "README.md")

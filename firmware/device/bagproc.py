@@ -47,13 +47,13 @@ class Ros2BagBackend:
 
 @dataclass
 class FakeBackend:
-    """platform_tools.device.fake_recorder, misbehaving on request (see its docstring)."""
+    """platform_tools.sim.fake_recorder, misbehaving on request (see its docstring)."""
     misbehave: str = "none"
     extra: Sequence[str] = ()
     name: str = "fake"
 
     def argv(self, spec: BagSpec) -> list[str]:
-        return [sys.executable, "-m", "platform_tools.device.fake_recorder", "-o", str(spec.folder),
+        return [sys.executable, "-m", "platform_tools.sim.fake_recorder", "-o", str(spec.folder),
                 "--max-bag-size", str(spec.split_size_bytes), "--misbehave", self.misbehave,
                 *self.extra, *spec.topics]
 

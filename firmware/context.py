@@ -9,8 +9,8 @@ import math
 import re
 from dataclasses import dataclass, fields
 
-from ..boson.discovery import USB_PID, USB_VID
-from ..rig import Rig
+from platform_tools.boson.discovery import USB_PID, USB_VID
+from platform_tools.rig import Rig
 
 #: frames the ZED wrapper does not publish: the thermal cameras, posed from the ZED X centre
 THERMAL_FRAMES = ("thermal_left", "thermal_left_optical", "thermal_right", "thermal_right_optical")

@@ -11,8 +11,8 @@ import subprocess
 from importlib import metadata as importlib_metadata
 from pathlib import Path
 
-from .. import atomic
-from ..rig import Rig
+from platform_tools.rig import atomic
+from platform_tools.rig import Rig
 
 FILE_NAME = "recording.json"
 REPO = Path(__file__).resolve().parents[2]

@@ -5,12 +5,12 @@ import argparse
 import json
 from pathlib import Path
 
-from platform_tools import atomic
-from platform_tools.cli.common import UserError, add_output_options, print_json
+from platform_tools.rig import atomic
+from platform_tools.rig.conventions import UserError, add_output_options, print_json
 
-from .corners_io import BoardCorners, format_corners
-from .detect import ImageError, detect_files, list_images
-from .synth_cmd import parse_board
+from calibration.corners_io import BoardCorners, format_corners
+from calibration.detect import ImageError, detect_files, list_images
+from calibration.commands.synth import parse_board
 
 
 def register(sub: argparse._SubParsersAction) -> None:

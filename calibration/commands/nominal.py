@@ -5,10 +5,10 @@ import argparse
 import io
 from pathlib import Path
 
-from platform_tools import atomic
-from platform_tools.cli.common import add_output_options, add_rig_options, print_json, rig_from_args
+from platform_tools.rig import atomic
+from platform_tools.rig.conventions import add_output_options, add_rig_options, print_json, rig_from_args
 
-from .nominal import nominal_cameras, to_cameramodel
+from platform_tools.rig.nominal import nominal_cameras
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -27,14 +27,14 @@ def cmd_nominal(args: argparse.Namespace) -> int:
     cams = nominal_cameras(rig)
     written = []
     with atomic.OutputDir(args.out) as stage:
-        for cam in cams:
+        for frame, model in cams.items():
             buf = io.StringIO()
-            model = to_cameramodel(cam)
-            model.write(buf, note=f"nominal model of {cam.name} from rig {rig.desc.name} (hash {rig.hash[:12]})")
-            name = f"{cam.name.removesuffix('_optical')}.cameramodel"
+            model.write(buf, note=f"nominal model of {frame} from rig {rig.desc.name} (hash {rig.hash[:12]})")
+            name = f"{frame.removesuffix('_optical')}.cameramodel"
             (stage / name).write_text(buf.getvalue())
-            written.append(dict(camera=cam.name, file=str(args.out / name), lensmodel=cam.lensmodel,
-                                intrinsics=cam.intrinsics.tolist(), imagersize=list(cam.imagersize)))
+            lensmodel, intrinsics = model.intrinsics()
+            written.append(dict(camera=frame, file=str(args.out / name), lensmodel=lensmodel,
+                                intrinsics=intrinsics.tolist(), imagersize=[int(x) for x in model.imagersize()]))
     if args.json:
         print_json(written)
     elif not args.quiet:

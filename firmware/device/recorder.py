@@ -24,13 +24,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-from ..rig import Rig
-from . import led, mcapcheck, metadata
-from .bagproc import Backend, BagSpec, RecorderProcess, StopResult
-from .button import Button, Press
-from .gpio import Gpio
-from .preflight import Report
-from .storage import GB, DiskWatchdog
+from platform_tools.rig import Rig
+from firmware.device import led, mcapcheck, metadata
+from firmware.device.bagproc import Backend, BagSpec, RecorderProcess, StopResult
+from firmware.device.button import Button, Press
+from firmware.device.gpio import Gpio
+from firmware.device.preflight import Report
+from firmware.device.storage import GB, DiskWatchdog
 
 log = logging.getLogger("platform_tools.recorder")
 
