@@ -18,6 +18,13 @@ COUNTS_PER_K = 40.0      # responsivity: ~0.025 K per count
 COUNTS_AT_AMBIENT = 7500.0
 
 
+def counts(above_ambient_k: np.ndarray) -> np.ndarray:
+    """The microbolometer's response, the one temperature -> Boson counts model of the project: raw counts
+    (float32, same shape, neither rounded nor clipped) of a signal ``above_ambient_k`` kelvin above
+    :data:`~calibration.synth.scene.AMBIENT_K` (``COUNTS_AT_AMBIENT`` at ambient, ``COUNTS_PER_K`` per kelvin)."""
+    return COUNTS_AT_AMBIENT + COUNTS_PER_K * np.asarray(above_ambient_k, np.float32)
+
+
 @dataclass
 class Sensor:
     gain: np.ndarray          # (H, W) relative responsivity (vignetting and non-uniformity)
@@ -40,5 +47,4 @@ class Sensor:
         drift = rng.normal(0.0, 0.2)                    # offset drift since the last FFC
         img = self.gain * img + self.offset_k + drift
         img += rng.normal(0.0, self.noise_k, size=img.shape).astype(np.float32)
-        counts = COUNTS_AT_AMBIENT + COUNTS_PER_K * img
-        return np.clip(np.rint(counts), 0, 65535).astype(np.uint16)
+        return np.clip(np.rint(counts(img)), 0, 65535).astype(np.uint16)
