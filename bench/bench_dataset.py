@@ -73,7 +73,7 @@ def main(argv=None) -> int:
     spec = rig.camera_model(rig.desc.sensors.thermal.camera_model)
     th = geometry.sim_camera(rig, "thermal_left_optical", spec.width_px, spec.height_px)
     boxes = geometry.boxes_at(geometry.SCENE, 1.0)
-    render = geometry.cast(th, th.rays_rig(), boxes)
+    render = geometry.cast(th, geometry.rays_rig(th), boxes)
     counts = geometry.counts_from_c(geometry.temperature_c(render, boxes, geometry.SCENE))
     noise = np.random.default_rng(0).normal(0, 8, counts.shape)
     for label, offset in (("min-max", 0.0), ("percentile clip", 30000.0)):
@@ -86,7 +86,7 @@ def main(argv=None) -> int:
     # 2. registration 1920x1200 -> 640x512
     zspec = rig.camera_model(rig.desc.sensors.zed_x.camera_model)
     zed = geometry.sim_camera(rig, "zed_x_left_optical", zspec.width_px, zspec.height_px)
-    zr = geometry.cast(zed, zed.rays_rig(), boxes)
+    zr = geometry.cast(zed, geometry.rays_rig(zed), boxes)
     depth = geometry.zed_depth_m(zr, geometry.SCENE)
     bgr = geometry.colour(zr, boxes, geometry.SCENE)
     cal = load_calibration(rig)

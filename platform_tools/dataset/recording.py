@@ -183,8 +183,9 @@ def image_layout(data: bytes) -> tuple[int, int, int, int]:
     return height, width, step, pos
 
 
-def _telemetry_rows(rig, width: int, height: int) -> int:
-    """How many telemetry rows a thermal frame of this size carries (0: none)."""
+def telemetry_rows(rig, width: int, height: int) -> int:
+    """How many Boson telemetry rows (platform_tools.boson.telemetry) a thermal frame of ``width`` x
+    ``height`` px carries below its image (0: none)."""
     from platform_tools.boson.telemetry import telemetry_rows_present
     rows = rig.desc.on_device.thermal_telemetry_rows
     model = rig.camera_model(rig.desc.sensors.thermal.camera_model)
@@ -265,7 +266,7 @@ def _thermal_tail(data: bytes, stream: str, stamp: int, rig, tele_rows: dict, fr
         return bytes(data[-4096:])
     key = (stream, width, height)
     if key not in tele_rows:
-        tele_rows[key] = _telemetry_rows(rig, width, height)
+        tele_rows[key] = telemetry_rows(rig, width, height)
     rows = tele_rows[key]
     end = off + (height - rows) * step
     if rows:

@@ -36,16 +36,17 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .calib import CameraCal
+from platform_tools.rig.cameras import imagersize
 
 KIND_PINHOLE, KIND_STEREOGRAPHIC, KIND_OPENCV, KIND_MRCAL = 0, 1, 2, 3
 _KINDS = {"LENSMODEL_PINHOLE": KIND_PINHOLE, "LENSMODEL_STEREOGRAPHIC": KIND_STEREOGRAPHIC,
           "LENSMODEL_OPENCV4": KIND_OPENCV, "LENSMODEL_OPENCV5": KIND_OPENCV, "LENSMODEL_OPENCV8": KIND_OPENCV}
 
 
-def _padded(cam: CameraCal) -> np.ndarray:
-    k = np.zeros(max(12, len(cam.intrinsics)))
-    k[:len(cam.intrinsics)] = cam.intrinsics
+def _padded(intrinsics: np.ndarray) -> np.ndarray:
+    """Intrinsics (N,) zero-padded to at least the 12 entries the numba OpenCV projection reads."""
+    k = np.zeros(max(12, len(intrinsics)))
+    k[:len(intrinsics)] = intrinsics
     return k
 
 
@@ -99,53 +100,36 @@ def _points(depth, rays, R, t, kind, k, qext, out_w, out_h, us, vs, zs):
     return n
 
 
+@numba.njit(cache=True, inline="always")
+def _corner(u0, v0, fu, fv, corner):
+    """Pixel (column, row) and bilinear weight of neighbour ``corner`` (0..3: du = corner & 1, dv = corner >> 1)
+    of a point at (u0 + fu, v0 + fv), u0 and v0 whole, fu and fv in [0, 1)."""
+    du = corner & 1
+    dv = corner >> 1
+    return u0 + du, v0 + dv, (fv if dv else 1.0 - fv) * (fu if du else 1.0 - fu)
+
+
 @numba.njit(cache=True)
 def _splat(us, vs, zs, src, out_h, out_w, tol, acc, wsum, zacc, zbuf):
     N = us.shape[0]
     C = src.shape[1]
-    for i in range(N):
-        u = us[i]
-        if np.isnan(u):
-            continue
-        v = vs[i]
-        z = zs[i]
-        u0 = int(np.floor(u))
-        v0 = int(np.floor(v))
-        fu = u - u0
-        fv = v - v0
-        for dv in range(2):
-            vv = v0 + dv
-            if vv < 0 or vv >= out_h:
+    for blend in range(2):                  # pass 0: the z-buffer; pass 1: the surface nearest each pixel blends
+        for i in range(N):
+            u = us[i]
+            if np.isnan(u):
                 continue
-            wv = fv if dv else 1.0 - fv
-            for du in range(2):
-                uu = u0 + du
-                if uu < 0 or uu >= out_w:
+            v = vs[i]
+            z = zs[i]
+            u0 = int(np.floor(u))
+            v0 = int(np.floor(v))
+            for corner in range(4):
+                uu, vv, w = _corner(u0, v0, u - u0, v - v0, corner)
+                if not (0 <= vv < out_h and 0 <= uu < out_w and w > 0.0):
                     continue
-                w = wv * (fu if du else 1.0 - fu)
-                if w > 0.0 and z < zbuf[vv, uu]:
-                    zbuf[vv, uu] = z
-    for i in range(N):
-        u = us[i]
-        if np.isnan(u):
-            continue
-        v = vs[i]
-        z = zs[i]
-        u0 = int(np.floor(u))
-        v0 = int(np.floor(v))
-        fu = u - u0
-        fv = v - v0
-        for dv in range(2):
-            vv = v0 + dv
-            if vv < 0 or vv >= out_h:
-                continue
-            wv = fv if dv else 1.0 - fv
-            for du in range(2):
-                uu = u0 + du
-                if uu < 0 or uu >= out_w:
-                    continue
-                w = wv * (fu if du else 1.0 - fu)
-                if w > 0.0 and z <= zbuf[vv, uu] * (1.0 + tol):
+                if not blend:
+                    if z < zbuf[vv, uu]:
+                        zbuf[vv, uu] = z
+                elif z <= zbuf[vv, uu] * (1.0 + tol):
                     for ch in range(C):
                         acc[vv, uu, ch] += w * src[i, ch]
                     wsum[vv, uu] += w
@@ -164,32 +148,36 @@ class Result:
 
 
 class Registrar:
-    """RGB of one ZED left image size into one thermal camera (models already at the recorded sizes)."""
+    """RGB of one ZED left image size into one thermal camera. ``zed`` and ``thermal`` are
+    ``mrcal.cameramodel``s already at the recorded sizes; ``rt_thermal_zed`` (6,) maps ZED left optical
+    points into the thermal optical frame (metres)."""
 
-    def __init__(self, zed: CameraCal, thermal: CameraCal, rt_thermal_zed: np.ndarray,
+    def __init__(self, zed, thermal, rt_thermal_zed: np.ndarray,
                  tolerance_percent: float, min_coverage: float = 0.5):
         import mrcal
         self.zed, self.thermal = zed, thermal
-        W, H = zed.imagersize
+        zed_lensmodel, zed_k = zed.intrinsics()
+        self.lensmodel, self.intrinsics = thermal.intrinsics()       # the thermal lens
+        W, H = imagersize(zed)
         u, v = np.meshgrid(np.arange(W, dtype=float), np.arange(H, dtype=float))
-        ray = mrcal.unproject(np.stack([u, v], -1), zed.lensmodel, zed.intrinsics)
+        ray = mrcal.unproject(np.stack([u, v], -1), zed_lensmodel, zed_k)
         self.rays = np.ascontiguousarray(ray[..., :2] / ray[..., 2:3])       # (x/z, y/z) per pixel
         self.R = mrcal.R_from_r(rt_thermal_zed[:3])
         self.t = np.array(rt_thermal_zed[3:], float)
-        self.kind = _KINDS.get(thermal.lensmodel, KIND_MRCAL)
-        self.k = _padded(thermal)
+        self.kind = _KINDS.get(self.lensmodel, KIND_MRCAL)
+        self.k = _padded(self.intrinsics)
         self.tol = tolerance_percent / 100.0
         #: weight a fully covered thermal pixel receives: ZED pixels per thermal pixel at the centre
-        self.density = float(zed.intrinsics[0] * zed.intrinsics[1] / (thermal.intrinsics[0] * thermal.intrinsics[1]))
+        self.density = float(zed_k[0] * zed_k[1] / (self.intrinsics[0] * self.intrinsics[1]))
         self.min_weight = min_coverage * self.density
-        self.out_w, self.out_h = thermal.imagersize
+        self.out_w, self.out_h = imagersize(thermal)
 
     def _external_projection(self, depth: np.ndarray) -> np.ndarray:
         import mrcal
         p = np.concatenate([self.rays * depth[..., None], depth[..., None]], -1).reshape(-1, 3)
         p = p @ self.R.T + self.t
         with np.errstate(invalid="ignore"):
-            return np.ascontiguousarray(mrcal.project(p, self.thermal.lensmodel, self.thermal.intrinsics))
+            return np.ascontiguousarray(mrcal.project(p, self.lensmodel, self.intrinsics))
 
     def points(self, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(u, v, z) in the thermal image of every ZED pixel, flattened; u is NaN where there is none."""
@@ -233,7 +221,7 @@ def register_numpy(reg: Registrar, depth: np.ndarray, src: np.ndarray) -> Result
     p = np.stack([reg.rays[ok][:, 0] * d, reg.rays[ok][:, 1] * d, d], -1) @ reg.R.T + reg.t
     front = p[:, 2] > 0
     p = p[front]
-    q = mrcal.project(p, reg.thermal.lensmodel, reg.thermal.intrinsics)
+    q = mrcal.project(p, reg.lensmodel, reg.intrinsics)
     u, v, z = q[:, 0], q[:, 1], p[:, 2]
     inside = (u > -1) & (u < reg.out_w) & (v > -1) & (v < reg.out_h)
     u, v, z = u[inside], v[inside], z[inside]

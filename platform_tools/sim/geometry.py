@@ -5,19 +5,23 @@ a back wall, a warm box that moves sideways over time and a near box in front of
 ZED and the thermal cameras, 46 mm apart vertically, see different occlusions). Everything above the
 wall is sky: no hit, so the ZED depth is NaN there (and +inf beyond the depth range).
 
-Each camera is the nominal mrcal model of ``platform_tools.rig.nominal`` (lens and pose from the rig
-description), scaled to the recorded image size. Rendering casts one ray per pixel centre
-(``mrcal.unproject``), intersects the boxes and keeps the nearest hit; the ZED depth is the Z of the
-hit in the ZED left optical frame, in metres, as zed-ros2-wrapper publishes it.
-
-The scaling of the intrinsics is written here on purpose, separately from the export's
-(platform_tools.dataset.calib): the registration test compares the two.
+Each camera is the project's one camera value, the rig's nominal ``mrcal.cameramodel``
+(``platform_tools.rig.nominal``: lens and pose from the rig description) scaled to the recorded image size
+(``platform_tools.rig.cameras.scaled``). Rendering casts one ray per pixel centre (``mrcal.unproject``),
+intersects the boxes and keeps the nearest hit; the ZED depth is the Z of the hit in the ZED left optical
+frame, in metres, as zed-ros2-wrapper publishes it. The thermal counts follow the synthetic calibration
+images' sensor response (``calibration.synth.sensor.counts``).
 """
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
 import numpy as np
+
+from calibration.synth import sensor
+from calibration.synth.scene import AMBIENT_K
+from platform_tools.rig.cameras import imagersize, scaled
+from platform_tools.rig.nominal import nominal_camera
 
 NO_HIT = -1
 
@@ -60,38 +64,34 @@ def boxes_at(scene: dict, t_s: float) -> list[Box]:
 
 
 # ----------------------------------------------------------------------------- cameras
-@dataclass(frozen=True)
-class SimCamera:
-    """A nominal camera at a recorded image size: mrcal lens model, scaled intrinsics, pose in the rig."""
-    name: str
-    lensmodel: str
-    intrinsics: np.ndarray       # fx fy cx cy at (width, height)
-    width: int
-    height: int
-    R_rig_cam: np.ndarray        # camera optical axes in the rig frame
-    c_rig_mm: np.ndarray         # camera centre in the rig frame
-
-    def rays_rig(self) -> np.ndarray:
-        """Unit ray direction of every pixel centre, in the rig frame, (h, w, 3)."""
-        import mrcal
-        u, v = np.meshgrid(np.arange(self.width, dtype=float), np.arange(self.height, dtype=float))
-        d = mrcal.unproject(np.stack([u, v], -1), self.lensmodel, self.intrinsics, normalize=True)
-        return d @ self.R_rig_cam.T
-
-    def project_rig(self, p_rig_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Pixel coordinates and optical-frame Z (mm) of rig-frame points (..., 3)."""
-        import mrcal
-        p_cam = (np.asarray(p_rig_mm, float) - self.c_rig_mm) @ self.R_rig_cam
-        return mrcal.project(p_cam, self.lensmodel, self.intrinsics), p_cam[..., 2]
+def sim_camera(rig, frame: str, width: int, height: int):
+    """The nominal ``mrcal.cameramodel`` of optical frame ``frame`` for images of ``width`` x ``height`` px."""
+    return scaled(nominal_camera(rig, frame), (width, height), what=frame)
 
 
-def sim_camera(rig, frame: str, width: int, height: int) -> SimCamera:
-    from platform_tools.rig.cameras import scaled
-    from platform_tools.rig.nominal import nominal_camera
-    model = scaled(nominal_camera(rig, frame), (width, height), what=frame)
-    lensmodel, k = model.intrinsics()
-    T = rig.frame(frame)
-    return SimCamera(frame, lensmodel, k, width, height, np.array(T.R), np.array(T.t))
+def pose_in_rig(model) -> tuple[np.ndarray, np.ndarray]:
+    """(R_rig_cam (3, 3): the optical axes as columns in the rig frame, c_rig_mm (3,): the camera centre in
+    the rig frame, mm) of an ``mrcal.cameramodel`` posed in the rig frame (``rt_fromref`` in metres)."""
+    import mrcal
+    Rt_rig_cam = mrcal.invert_Rt(mrcal.Rt_from_rt(model.extrinsics_rt_fromref()))
+    return Rt_rig_cam[:3], Rt_rig_cam[3] * 1000.0
+
+
+def rays_rig(model) -> np.ndarray:
+    """Unit ray direction of every pixel centre of ``model``, in the rig frame: (H, W, 3)."""
+    import mrcal
+    W, H = imagersize(model)
+    u, v = np.meshgrid(np.arange(W, dtype=float), np.arange(H, dtype=float))
+    d = mrcal.unproject(np.stack([u, v], -1), *model.intrinsics(), normalize=True)
+    return d @ pose_in_rig(model)[0].T
+
+
+def project_rig(model, p_rig_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel coordinates (..., 2) and optical-frame Z (..., mm) in ``model`` of rig-frame points (..., 3) mm."""
+    import mrcal
+    R_rig_cam, c_rig_mm = pose_in_rig(model)
+    p_cam = (np.asarray(p_rig_mm, float) - c_rig_mm) @ R_rig_cam
+    return mrcal.project(p_cam, *model.intrinsics()), p_cam[..., 2]
 
 
 # ----------------------------------------------------------------------------- ray casting
@@ -121,12 +121,22 @@ class Render:
     z_m: np.ndarray             # optical-frame Z in metres (nan: sky)
 
 
-def cast(cam: SimCamera, rays: np.ndarray, boxes: list[Box]) -> Render:
-    dist, which = _hit_boxes(cam.c_rig_mm, rays, boxes)
+def _render(c_rig_mm: np.ndarray, optical_z: np.ndarray, rays: np.ndarray, dist: np.ndarray,
+            which: np.ndarray) -> Render:
+    """The :class:`Render` of the nearest hits ``dist`` (mm along ``rays`` (H, W, 3) from the camera centre
+    ``c_rig_mm``) on boxes ``which``; ``optical_z`` (3,) is the camera's optical axis in the rig frame."""
     hit = which != NO_HIT
-    pts = np.where(hit[..., None], cam.c_rig_mm + rays * np.where(hit, dist, 0.0)[..., None], np.nan)
-    z = np.where(hit, dist * (rays @ cam.R_rig_cam[:, 2]) / 1000.0, np.nan)
+    pts = np.where(hit[..., None], c_rig_mm + rays * np.where(hit, dist, 0.0)[..., None], np.nan)
+    z = np.where(hit, dist * (rays @ optical_z) / 1000.0, np.nan)
     return Render(dist, which, pts, z)
+
+
+def cast(cam, rays: np.ndarray, boxes: list[Box]) -> Render:
+    """Cast ``rays`` (H, W, 3; :func:`rays_rig`) from the centre of ``cam`` (an ``mrcal.cameramodel`` posed
+    in the rig frame) onto ``boxes``."""
+    R_rig_cam, c_rig_mm = pose_in_rig(cam)
+    dist, which = _hit_boxes(c_rig_mm, rays, boxes)
+    return _render(c_rig_mm, R_rig_cam[:, 2], rays, dist, which)
 
 
 def _checker(points_mm: np.ndarray, size_mm: float) -> np.ndarray:
@@ -152,9 +162,14 @@ def temperature_c(r: Render, boxes: list[Box], scene: dict) -> np.ndarray:
     return t + np.where(r.which == NO_HIT, 0.0, _checker(r.points_mm, scene["checker_mm"]))
 
 
+#: 0 degC in kelvin
+ZERO_C_K = 273.15
+
+
 def counts_from_c(t_c: np.ndarray) -> np.ndarray:
-    """Raw 16-bit counts of a temperature (a simple linear response of this simulator)."""
-    return 7500.0 + 60.0 * np.asarray(t_c, np.float32)
+    """Raw Boson counts (float32, unrounded) of scene temperatures in degC (any shape), with the synthetic
+    calibration images' sensor response (:func:`calibration.synth.sensor.counts`)."""
+    return sensor.counts(np.asarray(t_c, np.float32) - np.float32(AMBIENT_K - ZERO_C_K))
 
 
 def zed_depth_m(r: Render, scene: dict) -> np.ndarray:
@@ -174,23 +189,21 @@ class SceneRenderer:
         self.scene = scene
         self.cams = {k: sim_camera(rig, f, *sizes["zed" if k.startswith("zed") else "thermal"])
                      for k, f in self.FRAMES.items()}
-        self.rays = {k: c.rays_rig() for k, c in self.cams.items()}
+        self.poses = {k: pose_in_rig(c) for k, c in self.cams.items()}
+        self.rays = {k: rays_rig(c) for k, c in self.cams.items()}
         boxes = boxes_at(scene, 0.0)
         self._moving = next(i for i, b in enumerate(boxes) if b.name == scene["moving"]["box"])
         static = [b for i, b in enumerate(boxes) if i != self._moving]
         self._static_index = np.array([i for i in range(len(boxes)) if i != self._moving] + [NO_HIT], np.int32)
-        self._static = {k: _hit_boxes(c.c_rig_mm, self.rays[k], static) for k, c in self.cams.items()}
+        self._static = {k: _hit_boxes(self.poses[k][1], self.rays[k], static) for k in self.cams}
 
     def render(self, camera: str, t_s: float) -> tuple[Render, list[Box]]:
         boxes = boxes_at(self.scene, t_s)
-        cam, rays = self.cams[camera], self.rays[camera]
+        (R_rig_cam, c_rig_mm), rays = self.poses[camera], self.rays[camera]
         dist_s, which_s = self._static[camera]
         which_s = self._static_index[which_s]            # NO_HIT (-1) indexes the last entry: NO_HIT
-        dist_m, hit_m = _hit_boxes(cam.c_rig_mm, rays, [boxes[self._moving]])
+        dist_m, hit_m = _hit_boxes(c_rig_mm, rays, [boxes[self._moving]])
         nearer = (hit_m != NO_HIT) & (dist_m < dist_s)
         dist = np.where(nearer, dist_m, dist_s)
         which = np.where(nearer, self._moving, which_s).astype(np.int32)
-        hit = which != NO_HIT
-        pts = np.where(hit[..., None], cam.c_rig_mm + rays * np.where(hit, dist, 0.0)[..., None], np.nan)
-        z = np.where(hit, dist * (rays @ cam.R_rig_cam[:, 2]) / 1000.0, np.nan)
-        return Render(dist, which, pts, z), boxes
+        return _render(c_rig_mm, R_rig_cam[:, 2], rays, dist, which), boxes

@@ -11,6 +11,7 @@ import yaml
 from mcap_ros2.writer import Writer
 
 from platform_tools.rig import atomic
+from platform_tools.rig.cameras import imagersize
 from platform_tools.rig.progress import progress
 from ..rig import Rig
 from platform_tools.boson import telemetry
@@ -150,8 +151,8 @@ def simulate(rig: Rig, out: Path, params: SimParams, scale: float = 0.25) -> dic
                                             "frame_counter_base": COUNTER_BASE,
                                             "ffc_start_pulse": tele.ffc_start_pulse},
                               "scene": renderer.scene,
-                              "cameras": {k: {"frame": c.name, "lensmodel": c.lensmodel,
-                                              "intrinsics": c.intrinsics.tolist(), "size": [c.width, c.height]}
+                              "cameras": {k: {"frame": renderer.FRAMES[k], "lensmodel": c.intrinsics()[0],
+                                              "intrinsics": c.intrinsics()[1].tolist(), "size": list(imagersize(c))}
                                           for k, c in renderer.cams.items()},
                               "units": "times in ns since the epoch (true clock unless noted); offsets in ms "
                                        "after the trigger; dropped: trigger pulse numbers"}

@@ -5,14 +5,8 @@ import json
 
 import pytest
 
-from platform_tools.rig import load_rig
 from platform_tools.sim.timeline import SimParams
 from platform_tools.sim.writer import simulate
-
-
-@pytest.fixture(scope="session")
-def rig():
-    return load_rig()
 
 
 @pytest.fixture(scope="session")

@@ -77,7 +77,7 @@ def test_registered_rgb_matches_the_scene_seen_by_the_thermal_camera(done, sim, 
     cam = truth["cameras"]["thermal_left"]
     th = geometry.sim_camera(rig, cam["frame"], *cam["size"])
     boxes = geometry.boxes_at(truth["scene"], k / truth["rate_hz"])
-    render = geometry.cast(th, th.rays_rig(), boxes)
+    render = geometry.cast(th, geometry.rays_rig(th), boxes)
     want = geometry.colour(render, boxes, truth["scene"]).astype(float)
     got = cv2.imread(str(out / x["thermal_left_rgb_registered_png"])).astype(float)
     mask = cv2.imread(str(out / x["thermal_left_mask_png"]), cv2.IMREAD_UNCHANGED) > 0

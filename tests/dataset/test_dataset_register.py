@@ -16,7 +16,7 @@ import pytest
 
 mrcal = pytest.importorskip("mrcal")
 
-from platform_tools.dataset.calib import load_calibration  # noqa: E402
+from platform_tools.dataset.calib import at_recorded_size, load_calibration  # noqa: E402
 from platform_tools.dataset.register import Registrar, register_numpy  # noqa: E402
 from platform_tools.sim import geometry  # noqa: E402
 
@@ -35,12 +35,12 @@ def scene(rig):
     boxes = geometry.boxes_at(geometry.SCENE, 0.7)
     zed = geometry.sim_camera(rig, "zed_x_left_optical", *ZED_SIZE)
     th = geometry.sim_camera(rig, "thermal_left_optical", *THERMAL_SIZE)
-    zr = geometry.cast(zed, zed.rays_rig(), boxes)
-    tr = geometry.cast(th, th.rays_rig(), boxes)
+    zr = geometry.cast(zed, geometry.rays_rig(zed), boxes)
+    tr = geometry.cast(th, geometry.rays_rig(th), boxes)
     depth = geometry.zed_depth_m(zr, geometry.SCENE)
     cal = load_calibration(rig)
-    reg = Registrar(cal.cams["zed_x_left_optical"].scaled(*ZED_SIZE, "test"),
-                    cal.cams["thermal_left_optical"].scaled(*THERMAL_SIZE, "test"),
+    reg = Registrar(at_recorded_size("zed_x_left_optical", cal.cams["zed_x_left_optical"], ZED_SIZE, "test"),
+                    at_recorded_size("thermal_left_optical", cal.cams["thermal_left_optical"], THERMAL_SIZE, "test"),
                     cal.rt_a_b("thermal_left_optical", "zed_x_left_optical"), TOL, min_coverage=0.5)
     return dict(boxes=boxes, zed=zed, th=th, zr=zr, tr=tr, depth=depth, reg=reg)
 
@@ -54,7 +54,7 @@ def test_scene_has_occlusions_and_missing_depth(scene):
 def test_every_point_lands_within_half_a_pixel_of_its_truth(scene):
     us, vs, zs = scene["reg"].points(scene["depth"])
     pts = scene["zr"].points_mm.reshape(-1, 3)
-    q_true, z_true = scene["th"].project_rig(pts)
+    q_true, z_true = geometry.project_rig(scene["th"], pts)
     landed = ~np.isnan(us)
     assert landed.sum() > 0.4 * landed.size
     err = np.hypot(us[landed] - q_true[landed, 0], vs[landed] - q_true[landed, 1])
@@ -68,7 +68,7 @@ def test_registered_image_lands_where_it_should(scene):
     reg, th = scene["reg"], scene["th"]
     res = reg.register(scene["depth"], scene["zr"].points_mm.astype(np.float64))
     assert res.mask.mean() > 0.4
-    q, _ = th.project_rig(res.image.astype(np.float64)[res.mask])
+    q, _ = geometry.project_rig(th, res.image.astype(np.float64)[res.mask])
     vv, uu = np.nonzero(res.mask)
     err = np.hypot(q[:, 0] - uu, q[:, 1] - vv)
     assert np.percentile(err, 99.5) < 0.5 and np.median(err) < 0.1, (np.median(err), np.percentile(err, 99.5))
@@ -137,14 +137,15 @@ def test_numba_and_numpy_agree(scene):
     ("LENSMODEL_OPENCV4", [-0.2, 0.05, 2e-3, 1e-3]),
     ("LENSMODEL_OPENCV12", [-0.2, 0.05, 1e-3, 1e-3, 0, 0, 0, 0, 1e-3, 0, 1e-3, 0])])   # via mrcal.project
 def test_thermal_lens_models_project_as_mrcal(scene, lensmodel, extra):
-    from platform_tools.dataset.calib import CameraCal
+    from platform_tools.rig.cameras import camera_model, imagersize
     th = scene["reg"].thermal
-    cam = CameraCal(th.name, lensmodel, np.concatenate([th.intrinsics[:4], extra]), th.imagersize, th.rt_cam_ref)
+    cam = camera_model(lensmodel, np.concatenate([th.intrinsics()[1][:4], extra]), imagersize(th),
+                       th.extrinsics_rt_fromref())
     reg = Registrar(scene["reg"].zed, cam, np.concatenate([mrcal.r_from_R(scene["reg"].R), scene["reg"].t]), TOL)
     us, vs, zs = reg.points(scene["depth"])
     ok = ~np.isnan(us)
     d = scene["depth"].ravel()[ok]
     p = np.concatenate([reg.rays.reshape(-1, 2)[ok] * d[:, None], d[:, None]], 1) @ reg.R.T + reg.t
-    q = mrcal.project(p, lensmodel, cam.intrinsics)
+    q = mrcal.project(p, *cam.intrinsics())
     assert ok.sum() > 1000
     np.testing.assert_allclose(np.stack([us[ok], vs[ok]], 1), q, atol=1e-6)

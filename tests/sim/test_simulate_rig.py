@@ -10,7 +10,6 @@ import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from platform_tools.rig import load_rig
 from platform_tools.sim.timeline import SimParams
 from platform_tools.sim.writer import simulate
 
@@ -29,8 +28,7 @@ def stamp(msg) -> int:
 
 
 @pytest.fixture(scope="module")
-def sim(tmp_path_factory):
-    rig = load_rig()
+def sim(tmp_path_factory, rig):
     out = tmp_path_factory.mktemp("sim") / "rec"
     truth = simulate(rig, out, SimParams(4.0, seed=3, drop_probability=0.02), scale=0.1)
     return rig, out, truth, read(out / "bag" / "bag_0.mcap")
@@ -138,3 +136,29 @@ def test_telemetry_rows_agree_with_the_trigger_and_the_status_topic(sim):
                 assert x.ffc_frame == start and x.frames_since_ffc == x.frame_counter - start
         in_ffc = [stamp(m) for m, x in zip(frames, tel) if x.ffc_in_progress]
         assert abs(in_ffc[0] - ffc["start_ns"]) < 2 * period_ns and abs(in_ffc[-1] - ffc["end_ns"]) < 2 * period_ns
+
+
+def test_thermal_counts_follow_the_synthetic_sensor_response(sim):
+    """One temperature -> counts model for the project: the simulated Bosons' pixels are the scene's
+    temperature through calibration.synth.sensor.counts, plus the simulator's noise of a few counts."""
+    from calibration.synth.scene import AMBIENT_K
+    from calibration.synth.sensor import COUNTS_PER_K, counts
+    from platform_tools.sim import geometry
+    rig, _, truth, msgs = sim
+    scene, rows = truth["scene"], truth["telemetry"]["rows"]
+    first = next(k for k in range(10) if k not in truth["dropped"]["thermal_left"])
+    m = msgs[rig.desc.on_device.topics.thermal_left][0][2]
+    raw = np.frombuffer(m.data, "<u2").reshape(m.height, m.width)[:m.height - rows].astype(float)
+    renderer = geometry.SceneRenderer(rig, {k: tuple(v) for k, v in truth["image_sizes"].items()}, scene)
+    r, boxes = renderer.render("thermal_left", first / truth["rate_hz"])
+    t_k = geometry.temperature_c(r, boxes, scene) + geometry.ZERO_C_K
+    noise = raw - counts(t_k - AMBIENT_K)
+    assert abs(noise.mean()) < 2 and 4 < noise.std() < 12, (noise.mean(), noise.std())
+    # and the contrast between the warm box and the sky is their temperature difference at the responsivity
+    # (the box's checker adds 0 or 1 K)
+    walker = next(b for b in boxes if b.name == "walker")
+    on_walker, on_sky = r.which == boxes.index(walker), r.which == geometry.NO_HIT
+    assert on_walker.sum() > 20 and on_sky.sum() > 20
+    dt = walker.temperature_c - scene["sky_temperature_c"]
+    gap = np.median(raw[on_walker]) - np.median(raw[on_sky])
+    assert dt * COUNTS_PER_K - 60 < gap < (dt + 1) * COUNTS_PER_K + 60, gap
