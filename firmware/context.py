@@ -57,9 +57,8 @@ def zed_resolution(rig: Rig) -> str:
 
 
 def device_paths(rig: Rig, side: str) -> dict[str, str]:
-    """The udev names of one Boson: its video node and its serial (control) port."""
-    name = getattr(rig.desc.sensors.thermal, side).device_name
-    return {"video": f"/dev/{name}_video", "serial": f"/dev/{name}_serial"}
+    """The paths of one Boson's udev names: its video node and its serial (control) port."""
+    return {kind: f"/dev/{name}" for kind, name in rig.boson_device_nodes(side).items()}
 
 
 def static_tfs(rig: Rig) -> list[StaticTf]:
@@ -95,6 +94,7 @@ def thermal_context(rig: Rig, side: str) -> dict:
         "serial": cam.serial,
         "device_name": cam.device_name,
         "devices": device_paths(rig, side),
+        "udev_names": rig.boson_device_nodes(side),     # the same, relative to /dev (udev's SYMLINK)
         "width_px": model.width_px,
         "height_px": model.height_px + od.thermal_telemetry_rows,
         "image_height_px": model.height_px,

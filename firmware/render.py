@@ -22,9 +22,11 @@ from firmware.context import build_context
 REPO = Path(__file__).resolve().parents[1]
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 #: what of this repository the thermal and tools images install (pip install --no-deps): the package
-#: metadata and the platform_tools package (not the workstation's cad/bom/calibration)
+#: metadata, the on-device package and what it imports: the rig description (platform_tools.rig) and
+#: the Boson tooling (platform_tools.boson); not the workstation's commands, dataset, simulator, CAD,
+#: BOM or calibration. Parent folders come with their __init__.py (see `source_files`).
 SOURCE_FILES = ("pyproject.toml", "README.md")
-SOURCE_PACKAGES = ("platform_tools",)
+SOURCE_PACKAGES = ("firmware", "platform_tools/rig", "platform_tools/boson")
 SOURCE_SUFFIXES = (".py", ".yaml", ".j2", ".html", ".css")
 
 
@@ -85,13 +87,22 @@ def render(rig: Rig) -> list[Output]:
     return outputs
 
 
-def source_outputs(prefix: str) -> list[Output]:
-    """This repository's installable source, copied into the images' build context."""
+def source_files() -> list[Path]:
+    """The files of this repository the device images install: SOURCE_FILES, every file of
+    SOURCE_PACKAGES with a SOURCE_SUFFIXES suffix, and the __init__.py of their parent packages."""
     files = [REPO / f for f in SOURCE_FILES]
     for pkg in SOURCE_PACKAGES:
+        parents = Path(pkg).parents
+        files += [REPO / parent / "__init__.py" for parent in reversed(parents) if parent != Path(".")]
         files += sorted(p for p in (REPO / pkg).rglob("*")
                         if p.is_file() and p.suffix in SOURCE_SUFFIXES and "__pycache__" not in p.parts)
-    return [Output(f"{prefix}/{p.relative_to(REPO).as_posix()}", p.read_text(), vendored=True) for p in files]
+    return list(dict.fromkeys(files))
+
+
+def source_outputs(prefix: str) -> list[Output]:
+    """This repository's installable source, copied into the images' build context."""
+    return [Output(f"{prefix}/{p.relative_to(REPO).as_posix()}", p.read_text(), vendored=True)
+            for p in source_files()]
 
 
 def warnings(rig: Rig) -> list[str]:

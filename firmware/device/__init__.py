@@ -3,11 +3,12 @@
 
 - ``gpio``          GPIO backends: Jetson.GPIO, files (tests across processes), memory
 - ``button``        debounce, short and long presses;  ``led``  patterns and blink codes
-- ``bagproc``       the recorder process and its backends (ros2, fake); SIGINT, then escalation
-- ``fake_recorder`` a stand-in for `ros2 bag record` that writes MCAP and misbehaves on request
+- ``bagproc``       the recorder process and its backends (ros2; fake: platform_tools.sim.fake_recorder,
+                    a workstation stand-in for tests); SIGINT, then escalation
 - ``mcapcheck``     check an MCAP after a stop; recover one without summary
 - ``storage``       mount points, free space, the disk watchdog
-- ``preflight``     the checks before recording (and `platform_tools doctor`); ``bosonprobe`` the Boson part
+- ``preflight``     the checks before recording (and `rig-device doctor`); ``bosonprobe`` the Boson part
+- ``ffc_status``    the FFC status of each frame, from its telemetry rows; ``ffc_node`` its ROS 2 node
 - ``metadata``      recording.json per recording
 - ``recorder``      the state machine and the button loop
 """

@@ -4,55 +4,54 @@ trigger rate, its external sync mode is the configured one, and its telemetry ro
 status is read from) are on when the rig records them."""
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
-from platform_tools.boson import commands as C
 from platform_tools.boson import discovery
-from platform_tools.boson.client import BosonClient
 from platform_tools.boson.codes import BosonError
-from platform_tools.boson.transport import SerialTransport
+from platform_tools.boson.discovery import Target
+from platform_tools.boson.operations import measure_frame_rate, open_client, read_info
+from platform_tools.boson.syncsetup import SYNC_MODES
 from platform_tools.rig import Rig
-from firmware.device.preflight import FAILED, OK, SKIPPED, SYNC_NAMES, TRIGGER_TOLERANCE, Check
+from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
+
+#: how far (a fraction of sync.rate_hz) a camera's measured frame rate may be from the trigger's
+TRIGGER_TOLERANCE = 0.2
+#: what the pre-flight reads of each camera (platform_tools.boson.operations.INFO)
+PROBE_KEYS = ("serial", "firmware", "sync_mode", "telemetry")
 
 
-def _port(rig: Rig, side: str, dev_dir: Path, found) -> tuple[str, int | None]:
+def _target(rig: Rig, side: str, dev_dir: Path, found: list[discovery.Found]) -> Target:
     """The udev name when it exists (on the Orin, in the container), else the by-id discovery."""
-    cam = getattr(rig.desc.sensors.thermal, side)
-    udev = dev_dir / f"{cam.device_name}_serial"
+    udev = dev_dir / rig.boson_device_nodes(side)["serial"]
     if udev.exists():
-        return str(udev), cam.serial
-    target = discovery.select_targets(side, rig, found)[0]
-    return target.port, target.serial
+        return Target(side, str(udev), getattr(rig.desc.sensors.thermal, side).serial)
+    return discovery.select_targets(side, rig, found)[0]
 
 
-def _probe(rig: Rig, side: str, port: str, serial: int | None, window_s: float) -> dict:
-    client = BosonClient(SerialTransport(port), label=side)
-    with client.open():
-        sn = client.call(C.GET_CAMERA_SN)
-        if serial is not None and sn != serial:
-            raise discovery.SelectionError(f"{port} answers with SN {sn}, the rig expects {serial} "
-                                           f"(sensors.thermal.{side}.serial)")
-        rev = client.call(C.GET_SOFTWARE_REV)
-        mode = C.enum_name(client.call(C.GET_EXT_SYNC))
-        telemetry = C.enum_name(client.call(C.GET_TELEMETRY))
-        c0, t0 = client.call(C.GET_FRAME_COUNT), time.monotonic()
-        time.sleep(window_s)
-        c1, t1 = client.call(C.GET_FRAME_COUNT), time.monotonic()
-    return {"serial": sn, "firmware": ".".join(map(str, rev)) if isinstance(rev, (tuple, list)) else str(rev),
-            "port": port, "sync_mode": str(mode), "telemetry": str(telemetry), "frame_rate_hz": round(((c1 - c0) & 0xFFFFFFFF) / (t1 - t0), 2)}
+def probe(target: Target, window_s: float) -> dict:
+    """serial, firmware, port, sync_mode, telemetry and frame_rate_hz (over ``window_s`` s) of one
+    camera; raises SelectionError when it answers with another serial number than the rig's."""
+    with open_client(target) as client:
+        info = read_info(client, PROBE_KEYS)
+        if target.serial is not None and info["serial"] != target.serial:
+            raise discovery.SelectionError(f"{target.port} answers with SN {info['serial']}, the rig expects "
+                                           f"{target.serial} (sensors.thermal.{target.label}.serial)")
+        rate = measure_frame_rate(client, window_s)
+    return {"serial": info["serial"], "firmware": info["firmware"], "port": target.port,
+            "sync_mode": str(info["sync_mode"]), "telemetry": str(info["telemetry"]),
+            "frame_rate_hz": round(rate, 2)}
 
 
 def checks(rig: Rig, dev_dir: Path, cameras: dict) -> list[Check]:
+    """The thermal cameras, trigger, sync mode and telemetry checks; fills ``cameras`` (side -> probe)."""
     found = discovery.discover()
     problems, sync_bad, trig_bad, telemetry_bad = [], [], [], []
     want_telemetry = rig.desc.on_device.thermal_telemetry_rows > 0
     rate = rig.desc.sync.rate_hz
-    want_mode = SYNC_NAMES[rig.desc.sync.boson_mode]
+    want_mode = SYNC_MODES[rig.desc.sync.boson_mode].name
     for side in ("left", "right"):
         try:
-            port, serial = _port(rig, side, dev_dir, found)
-            info = _probe(rig, side, port, serial, rig.desc.on_device.trigger_watch_s)
+            info = probe(_target(rig, side, dev_dir, found), rig.desc.on_device.trigger_watch_s)
         except (discovery.SelectionError, BosonError, OSError) as exc:
             problems.append(f"{side}: {exc}")
             continue

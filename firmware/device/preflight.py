@@ -1,4 +1,4 @@
-"""Pre-flight checks before a recording, and `platform_tools doctor`.
+"""Pre-flight checks before a recording, and `rig-device doctor` (`platform_tools doctor`).
 
 1. data drive   the output folder is on the filesystem mounted at recording.data_mount, and that
                 is not the root filesystem (the Orin's eMMC)
@@ -18,12 +18,10 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
-from platform_tools.rig import Rig
+from firmware.device import bosonprobe
 from firmware.device.storage import GB, free_bytes, mount_point
-
-SYNC_NAMES = {"slave": "SLAVE", "master": "MASTER", "disabled": "DISABLE"}
-TRIGGER_TOLERANCE = 0.2
+from platform_tools.rig import Rig
+from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
 
 
 @dataclass
@@ -66,18 +64,13 @@ def check_free_space(rig: Rig, output_dir: Path) -> Check:
 def check_video_nodes(rig: Rig, dev_dir: Path) -> Check:
     missing = []
     for side in ("left", "right"):
-        node = dev_dir / f"{getattr(rig.desc.sensors.thermal, side).device_name}_video"
+        node = dev_dir / rig.boson_device_nodes(side)["video"]
         if not node.exists():
             missing.append(f"{side} {node}")
     if missing:
         return Check("thermal video", FAILED, f"missing: {', '.join(missing)} (camera unplugged, or the udev rules "
                                               f"not installed: firmware/udev)")
     return Check("thermal video", OK, "both video nodes present")
-
-
-def _boson_checks(rig: Rig, dev_dir: Path, report: Report) -> list[Check]:
-    from firmware.device import bosonprobe
-    return bosonprobe.checks(rig, dev_dir, report.cameras)
 
 
 def run_preflight(rig: Rig, output_dir: Path | None = None, *, boson: bool = True,
@@ -87,7 +80,7 @@ def run_preflight(rig: Rig, output_dir: Path | None = None, *, boson: bool = Tru
     report.checks += [check_data_drive(rig, output_dir), check_free_space(rig, output_dir),
                       check_video_nodes(rig, dev_dir)]
     if boson:
-        report.checks += _boson_checks(rig, dev_dir, report)
+        report.checks += bosonprobe.checks(rig, dev_dir, report.cameras)
     else:
         report.checks += [Check(n, SKIPPED, "--no-boson")
                           for n in ("thermal cameras", "trigger", "sync mode", "telemetry")]

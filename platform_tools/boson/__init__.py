@@ -6,9 +6,12 @@ Module map:
 - ``fslp``       framing, escaping, CRC, sequence numbers, stream decoder (no I/O)
 - ``codes``      FLR_RESULT codes, one named exception class per code; the package's error types
 - ``commands``   the typed command table (function id, request and reply layout, enums)
-- ``transport``  pyserial port: open, flush, read with deadlines, re-open after re-enumeration
+- ``transport``  the Transport protocol; the pyserial port: open, flush, read with deadlines, re-open
+- ``loopback``   an in-memory Transport answering on bytes (tests of the client without a pty)
 - ``client``     one camera: sequence numbers, reply matching, retries with back-off, reboot
 - ``discovery``  cameras present (by-id links, pyserial port list, pyusb) and the rig's left/right
-- ``syncsetup``  read, diff, apply, verify, check the trigger, persist, revert on failure
+- ``operations`` identity and state, frame rate, FFC, factory defaults, raw commands; per camera, in parallel
+- ``syncsetup``  the plan from the rig; read, diff, apply, verify, check the trigger, persist, revert
+- ``telemetry``  the wire format of the telemetry rows below each image (FFC status, frame counters)
 - ``emulator``   a stateful Boson on a pty with a by-id link, a simulated trigger and fault injection
 """

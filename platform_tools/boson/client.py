@@ -1,4 +1,5 @@
-"""One Boson over one transport: sequence numbers, reply matching, retries with back-off, reboot.
+"""One Boson over one transport (its serial port, or any ``transport.Transport``, such as the in-memory
+``loopback.LoopbackTransport``): sequence numbers, reply matching, retries with back-off, reboot.
 
 ``call(command, *args)`` sends a request and returns the decoded reply value. A reply must echo the
 request's channel, sequence number and function id; anything else (a late reply to an earlier
@@ -16,7 +17,7 @@ from typing import Any, Callable
 from . import commands as C
 from . import fslp
 from .codes import BadReply, CameraError, PortGone, ReplyTimeout, TransportError, error_for
-from .transport import SerialTransport
+from .transport import Transport
 
 log = logging.getLogger(__name__)
 
@@ -49,7 +50,7 @@ Hook = Callable[[str, bytes], None]   # (direction "tx"/"rx", raw bytes) for ses
 
 
 class BosonClient:
-    def __init__(self, transport: SerialTransport, *, timeouts: Timeouts = Timeouts(), retries: int = 3,
+    def __init__(self, transport: Transport, *, timeouts: Timeouts = Timeouts(), retries: int = 3,
                  backoff_s: float = 0.02, label: str = "", hook: Hook | None = None, first_sequence: int = 1):
         self.transport = transport
         self.timeouts = timeouts

@@ -14,15 +14,15 @@ Nothing here raises for a camera problem: :func:`configure` returns a :class:`Ca
 from __future__ import annotations
 
 import logging
-import time
 from dataclasses import asdict, dataclass, field
 from enum import IntEnum
 from typing import Any
 
-from platform_tools.boson.telemetry import EXPECTED_LOCATION
 from . import commands as C
 from .client import BosonClient
 from .codes import BosonError, CameraError, IdentityMismatch
+from .operations import measure_frame_rate
+from .telemetry import EXPECTED_LOCATION
 
 log = logging.getLogger(__name__)
 
@@ -96,6 +96,62 @@ class CameraResult:
         d["ok"] = self.ok
         return d
 
+    def error_line(self) -> str:
+        """What went wrong, as one line starting with the camera's label (and its status, unless it
+        could not be read at all)."""
+        text = self.error or ""
+        text = text if text.startswith(self.label) else f"{self.label}: {text}"
+        return text if self.status == "error" else f"{self.label}: {self.status}: {text.removeprefix(self.label + ': ')}"
+
+
+# ---------------------------------------------------------------------------- the plan, from the rig
+def plan_for(rig, *, mode: str | None = None, display_mode: str | None = None, persist: bool | None = None,
+             dry_run: bool = False, check_trigger_s: float | None = None, reboot_verify: bool = False) -> Plan:
+    """The plan for the rig (a platform_tools.rig.Rig): external sync ``mode`` ("slave", "master" or
+    "disabled"; default sync.boson_mode), telemetry rows on when the rig records them
+    (on_device.thermal_telemetry_rows > 0), ``persist`` to flash (default sync.persist), and with
+    ``check_trigger_s`` a check that frames arrive at sync.rate_hz over that many seconds (slave only).
+    ``display_mode`` "continuous" or "one-shot" also sets dvoSetDisplayMode. ValueError (one line) for a
+    combination that cannot be done."""
+    sync = rig.desc.sync
+    mode = mode or sync.boson_mode
+    desired = {"ext_sync_mode": SYNC_MODES[mode]}
+    if display_mode:
+        desired["display_mode"] = C.DisplayMode[display_mode.upper().replace("-", "_")]
+    if rig.desc.on_device.thermal_telemetry_rows > 0:  # the rig records FFC status from telemetry rows
+        desired["telemetry_state"] = C.TelemetryState.ENABLED
+    persist = sync.persist if persist is None else persist
+    if check_trigger_s is not None and check_trigger_s <= 0:
+        raise ValueError("--check-seconds must be positive")
+    if reboot_verify and not persist:
+        raise ValueError("--reboot-verify checks what was written to flash: use it with --persist")
+    check = None
+    if check_trigger_s is not None:
+        if mode != "slave":
+            raise ValueError("--check-trigger applies to --slave (frames per trigger pulse)")
+        check = TriggerCheck(rate_hz=sync.rate_hz, window_s=check_trigger_s)
+    return Plan(desired, persist=persist, dry_run=dry_run, check_trigger=check, reboot_verify=reboot_verify)
+
+
+def plan_warnings(plan: Plan, rig) -> list[str]:
+    """What the user should know before the plan runs (flash in slave mode, a rising trigger edge)."""
+    mode = C.enum_name(plan.desired["ext_sync_mode"])
+    warnings = []
+    if plan.persist and mode == "slave" and not plan.dry_run:
+        warnings.append("writing SLAVE mode to flash: after power-up the cameras show no video until the "
+                        "trigger runs (use --no-persist to keep it until the next power cycle)")
+    if mode == "slave" and rig.desc.sync.edge != "falling":
+        warnings.append(f"sync.edge is {rig.desc.sync.edge}; public notes say the Boson triggers on the falling "
+                        "edge: check the wiring")
+    return warnings
+
+
+def summary(plan: Plan, results: list[CameraResult], warnings: list[str]) -> dict:
+    """The plan and every camera's result, as `boson-config --json` prints it."""
+    return {"mode": C.enum_name(plan.desired["ext_sync_mode"]), "persist": plan.persist, "dry_run": plan.dry_run,
+            "check_trigger": plan.check_trigger is not None, "ok": all(r.ok for r in results),
+            "warnings": warnings, "cameras": [r.to_dict() for r in results]}
+
 
 # ---------------------------------------------------------------------------- small steps
 def read_settings(client: BosonClient, keys) -> dict[str, Any]:
@@ -121,13 +177,6 @@ def verify(client: BosonClient, desired: dict[str, Any], what: str) -> dict[str,
     if bad:
         raise StepFailed(f"{what}: " + "; ".join(bad))
     return got
-
-
-def measure_frame_rate(client: BosonClient, window_s: float) -> float:
-    c0, t0 = client.call(C.GET_FRAME_COUNT), time.monotonic()
-    time.sleep(window_s)
-    c1, t1 = client.call(C.GET_FRAME_COUNT), time.monotonic()
-    return ((c1 - c0) & 0xFFFFFFFF) / (t1 - t0)
 
 
 def check_trigger(client: BosonClient, check: TriggerCheck, result: CameraResult) -> None:

@@ -1,5 +1,7 @@
-"""A Boson's serial port through pyserial: open (exclusive), flush, write, read with a deadline, and
-re-open after the camera re-enumerates (reboot, cable pulled and plugged back).
+"""How a client reaches a camera: the :class:`Transport` protocol, and a Boson's serial port through
+pyserial (:class:`SerialTransport`): open (exclusive), flush, write, read with a deadline, and re-open
+after the camera re-enumerates (reboot, cable pulled and plugged back). An in-memory transport for
+tests is platform_tools.boson.loopback.
 
 Use the stable path (``/dev/serial/by-id/usb-FLIR_Boson_<SN>-if00``) where there is one: after a
 re-enumeration ``/dev/ttyACM0`` may come back as ``/dev/ttyACM1`` but the by-id link follows it.
@@ -11,6 +13,7 @@ import logging
 import os
 import select
 import time
+from typing import Protocol
 
 import serial
 
@@ -34,6 +37,35 @@ def _open_error(path: str, exc: Exception) -> TransportError:
     if code in (errno.EBUSY, errno.EAGAIN, errno.EWOULDBLOCK) or "lock" in text.lower():
         return PortBusy(f"{path}: the port is in use by another program; close it and retry")
     return TransportError(f"{path}: cannot open the port ({text})")
+
+
+class Transport(Protocol):
+    """A byte pipe to one camera, as :class:`~platform_tools.boson.client.BosonClient` uses it. Errors
+    are the TransportError family of platform_tools.boson.codes: PortGone when the port vanished (the
+    client re-opens and retries), PortNotFound / PortPermission / PortBusy when it cannot be opened."""
+    path: str            # the name of the port, for messages
+    reopens: int         # how many times it was re-opened
+
+    @property
+    def is_open(self) -> bool: ...
+
+    def open(self) -> None: ...
+
+    def close(self) -> None: ...
+
+    def flush_input(self) -> None:
+        """Drop whatever arrived and was not read yet."""
+
+    def write(self, data: bytes) -> None: ...
+
+    def read(self, timeout_s: float) -> bytes:
+        """What has arrived, waiting up to ``timeout_s`` seconds for the first byte; b"" on timeout."""
+
+    def wait_gone(self, timeout_s: float) -> bool:
+        """After a reboot request: wait up to ``timeout_s`` seconds until the port disappears; True if it did."""
+
+    def reopen(self, timeout_s: float) -> None:
+        """Close, then open again as soon as the port is back, within ``timeout_s`` seconds (else PortGone)."""
 
 
 class SerialTransport:

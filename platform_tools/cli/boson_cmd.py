@@ -1,28 +1,19 @@
-"""`platform_tools boson-*`: configure, inspect and exercise the FLIR Boson cameras over serial.
+"""`platform_tools boson-*`: configure and inspect the FLIR Boson cameras over serial.
 
-boson-config (external sync, safely), boson-info, boson-ffc, boson-restore-defaults, boson-raw and
-boson-emulator (an emulated Boson on a pseudo-terminal). See docs/boson.md.
+boson-config (external sync, safely), boson-info, boson-ffc, boson-restore-defaults and boson-raw;
+boson-emulator (emulated Bosons on pseudo-terminals) is in boson_emulator_cmd. Each command parses,
+calls platform_tools.boson (operations, syncsetup) once per camera, and prints. See docs/boson.md.
 """
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import signal
-import subprocess
 import sys
-import tempfile
-import threading
-import time
-from concurrent.futures import ThreadPoolExecutor
-from pathlib import Path
 
-from platform_tools.rig import atomic
-from ..boson import commands as C
-from ..boson import discovery, syncsetup
-from ..boson.client import BosonClient, Timeouts
-from ..boson.codes import BosonError, CameraError
-from ..boson.transport import SerialTransport
+from platform_tools.boson import discovery, syncsetup
+from platform_tools.boson import operations as ops
+from platform_tools.boson.client import Timeouts
+from platform_tools.boson.codes import BosonError
+from platform_tools.cli import boson_emulator_cmd
 from platform_tools.rig.conventions import (CheckFailed, UserError, add_output_options, add_rig_options, error,
     print_json, rig_from_args)
 
@@ -56,16 +47,20 @@ def _targets(args, rig) -> list[discovery.Target]:
         raise UserError(str(exc)) from None
 
 
-def _client(target: discovery.Target, args) -> BosonClient:
-    client = BosonClient(SerialTransport(target.port), timeouts=_timeouts(args), retries=args.retries,
-                         label=target.label)
-    return client.open()
+def _on_each(args, rig, work, row=lambda target: {}) -> list[dict]:
+    """``work(target, client)`` on every selected camera at once: one row per camera, starting with
+    label, port and ``row(target)`` (see ops.on_camera)."""
+    timeouts = _timeouts(args)
+    return ops.per_camera(_targets(args, rig), lambda t: ops.on_camera(
+        t, timeouts, args.retries, lambda client: work(t, client), **row(t)))
 
 
-def _per_camera(targets, work):
-    """Run ``work(target)`` on every camera at once; one camera's failure never stops the other."""
-    with ThreadPoolExecutor(max_workers=max(1, len(targets))) as pool:
-        return list(pool.map(work, targets))
+def _report_errors(rows: list[dict]) -> int:
+    """One error line per failed camera; the exit code (1 when one failed)."""
+    for r in rows:
+        if "error" in r:
+            error(ops.error_line(r))
+    return 1 if any("error" in r for r in rows) else 0
 
 
 # ---------------------------------------------------------------------------- registration
@@ -137,63 +132,26 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_output_options(p)
     p.set_defaults(handler=cmd_raw)
 
-    p = sub.add_parser("boson-emulator", help="run emulated Bosons on pseudo-terminals (for tests and demos)",
-                       description="Serve one emulated Boson per --serial on a pseudo-terminal, publish a "
-                                   "by-id link usb-FLIR_Boson_<SN>-if00 for each, and print one line per "
-                                   "camera: serial, pty, link. Runs until interrupted (SIGUSR1 starts the "
-                                   "simulated trigger, SIGUSR2 stops it), for --duration, or while --run runs.",
-                       epilog="Faults: KIND[:p=P][:n=N][:fid=0xID][:times=K], comma-separated; kinds: drop, "
-                              "split, badcrc, wrongseq, garbage, stall, busy, notready, reboot.")
-    p.add_argument("--serial", type=int, action="append", metavar="N",
-                   help="camera serial number (repeat for several cameras; default 93588)")
-    p.add_argument("--by-id-dir", metavar="DIR",
-                   help=f"where to publish the by-id links (default: ${discovery.BY_ID_ENV} or a new temp folder)")
-    p.add_argument("--faults", action="append", default=[], metavar="RULES", help="fault rules (see below)")
-    p.add_argument("--seed", type=int, default=0, help="random seed of the faults")
-    p.add_argument("--boot-seconds", type=float, default=0.5, metavar="S", help="simulated boot time (default 0.5)")
-    p.add_argument("--trigger", action="store_true", help="start with the simulated trigger running")
-    p.add_argument("--trigger-hz", type=float, metavar="HZ", help="trigger rate (default: sync.rate_hz)")
-    p.add_argument("--persist-slave", action="store_true",
-                   help="start as if slave mode had been saved to flash earlier")
-    p.add_argument("--log", metavar="FILE", type=Path, help="write every request and reply as JSON lines")
-    p.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
-    p.add_argument("--session-out", metavar="DIR", type=Path,
-                   help="with --run: write the command's JSON output, the session log and the devices here")
-    p.add_argument("--run", nargs=argparse.REMAINDER, metavar="COMMAND",
-                   help="run this platform_tools command against the emulators, then stop (must be last)")
-    add_rig_options(p)
-    add_output_options(p)
-    p.set_defaults(handler=cmd_emulator)
+    boson_emulator_cmd.register(sub)
 
 
 # ---------------------------------------------------------------------------- boson-config
 def _plan(args, rig) -> syncsetup.Plan:
-    sync = rig.desc.sync
-    mode = args.mode or sync.boson_mode
-    desired = {"ext_sync_mode": syncsetup.SYNC_MODES[mode]}
-    if args.display_mode:
-        desired["display_mode"] = C.DisplayMode[args.display_mode.upper().replace("-", "_")]
-    if rig.desc.on_device.thermal_telemetry_rows > 0:  # the rig records FFC status from telemetry rows
-        desired["telemetry_state"] = C.TelemetryState.ENABLED
-    persist = sync.persist if args.persist is None else args.persist
     if args.check_seconds <= 0:
         raise UserError("--check-seconds must be positive")
-    if args.reboot_verify and not persist:
-        raise UserError("--reboot-verify checks what was written to flash: use it with --persist")
-    check = None
-    if args.check_trigger:
-        rate = sync.rate_hz if mode == "slave" else None
-        if rate is None:
-            raise UserError("--check-trigger applies to --slave (frames per trigger pulse)")
-        check = syncsetup.TriggerCheck(rate_hz=rate, window_s=args.check_seconds)
-    return syncsetup.Plan(desired, persist=persist, dry_run=args.dry_run, check_trigger=check,
-                          reboot_verify=args.reboot_verify)
+    try:
+        return syncsetup.plan_for(rig, mode=args.mode, display_mode=args.display_mode, persist=args.persist,
+                                  dry_run=args.dry_run,
+                                  check_trigger_s=args.check_seconds if args.check_trigger else None,
+                                  reboot_verify=args.reboot_verify)
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
 
 
 def _configure_one(target, args, plan) -> syncsetup.CameraResult:
     result = syncsetup.CameraResult(target.label, target.port, target.serial)
     try:
-        client = _client(target, args)
+        client = ops.open_client(target, _timeouts(args), args.retries)
     except BosonError as exc:
         result.error = str(exc)
         return result
@@ -204,33 +162,20 @@ def _configure_one(target, args, plan) -> syncsetup.CameraResult:
 def cmd_config(args) -> int:
     rig = rig_from_args(args)
     plan = _plan(args, rig)
-    mode = C.enum_name(plan.desired["ext_sync_mode"])
-    warnings = []
-    if plan.persist and mode == "slave" and not args.dry_run:
-        warnings.append("writing SLAVE mode to flash: after power-up the cameras show no video until the "
-                        "trigger runs (use --no-persist to keep it until the next power cycle)")
-    if mode == "slave" and rig.desc.sync.edge != "falling":
-        warnings.append(f"sync.edge is {rig.desc.sync.edge}; public notes say the Boson triggers on the falling "
-                        "edge: check the wiring")
+    warnings = syncsetup.plan_warnings(plan, rig)
     if not args.quiet:
         for w in warnings:
             print(f"platform_tools: warning: {w}", file=sys.stderr)
-    targets = _targets(args, rig)
-    results = _per_camera(targets, lambda t: _configure_one(t, args, plan))
-    ok = all(r.ok for r in results)
-    doc = {"mode": mode, "persist": plan.persist, "dry_run": plan.dry_run,
-           "check_trigger": plan.check_trigger is not None, "ok": ok, "warnings": warnings,
-           "cameras": [r.to_dict() for r in results]}
+    results = ops.per_camera(_targets(args, rig), lambda t: _configure_one(t, args, plan))
+    doc = syncsetup.summary(plan, results, warnings)
     if args.json:
         print_json(doc)
     elif not args.quiet:
         _print_config(doc)
     for r in results:
         if not r.ok:
-            text = r.error or ""
-            text = text if text.startswith(r.label) else f"{r.label}: {text}"
-            error(text if r.status == "error" else f"{r.label}: {r.status}: {text.removeprefix(r.label + ': ')}")
-    return 0 if ok else 1
+            error(r.error_line())
+    return 0 if doc["ok"] else 1
 
 
 def _print_config(doc: dict) -> None:
@@ -252,112 +197,41 @@ def _print_config(doc: dict) -> None:
 
 
 # ---------------------------------------------------------------------------- boson-info
-INFO_FIELDS = [
-    ("serial", C.GET_CAMERA_SN), ("sensor_serial", C.GET_SENSOR_SN), ("part_number", C.GET_CAMERA_PN),
-    ("firmware", C.GET_SOFTWARE_REV), ("fpa_temp_c", C.GET_FPA_TEMP_C), ("sync_mode", C.GET_EXT_SYNC),
-    ("ffc_mode", C.GET_FFC_MODE), ("ffc_status", C.GET_FFC_STATUS), ("gain_mode", C.GET_GAIN_MODE),
-    ("frame_count", C.GET_FRAME_COUNT),
-]
-
-
-def _info_one(target, args) -> dict:
-    row: dict = {"label": target.label, "port": target.port, "video": target.video}
-    try:
-        with _client(target, args) as client:
-            for key, cmd in INFO_FIELDS:
-                value = client.call(cmd)
-                if key == "firmware":
-                    value = ".".join(str(v) for v in value)
-                elif key == "fpa_temp_c":
-                    value = value / 10.0
-                row[key] = C.enum_name(value)
-        if target.serial is not None and row["serial"] != target.serial:
-            row["error"] = f"answers as SN {row['serial']}, not SN {target.serial}"
-    except BosonError as exc:
-        row["error"] = str(exc)
-    return row
+INFO_COLUMNS = ["label", "serial", "part_number", "firmware", "fpa_temp_c", "sync_mode", "ffc_mode", "ffc_status",
+                "gain_mode", "frame_count", "port"]
 
 
 def cmd_info(args) -> int:
-    rig = rig_from_args(args)
-    rows = _per_camera(_targets(args, rig), lambda t: _info_one(t, args))
+    rows = _on_each(args, rig_from_args(args), lambda t, c: ops.camera_info(c, t.serial),
+                    row=lambda t: {"video": t.video})
     if args.json:
         print_json({"cameras": rows})
     elif not args.quiet:
-        cols = ["label", "serial", "part_number", "firmware", "fpa_temp_c", "sync_mode", "ffc_mode",
-                "ffc_status", "gain_mode", "frame_count", "port"]
-        table = [cols] + [[str(r.get(c, "-")) for c in cols] for r in rows if "serial" in r]
-        widths = [max(len(row[i]) for row in table) for i in range(len(cols))]
+        table = [INFO_COLUMNS] + [[str(r.get(c, "-")) for c in INFO_COLUMNS] for r in rows if "serial" in r]
+        widths = [max(len(row[i]) for row in table) for i in range(len(INFO_COLUMNS))]
         for row in table:
             print("  ".join(v.ljust(w) for v, w in zip(row, widths)).rstrip())
-    for r in rows:
-        if "error" in r:
-            error(r["error"] if r["error"].startswith(r["label"]) else f"{r['label']}: {r['error']}")
-    return 1 if any("error" in r for r in rows) else 0
+    return _report_errors(rows)
 
 
 # ---------------------------------------------------------------------------- boson-ffc
-def _ffc_one(target, args) -> dict:
-    row: dict = {"label": target.label, "port": target.port, "action": args.action}
-    try:
-        with _client(target, args) as client:
-            if args.action == "run":
-                client.call(C.RUN_FFC)
-                deadline = time.monotonic() + 5 * args.timeout + 2.0
-                status = client.call(C.GET_FFC_STATUS)
-                while status in (C.FfcStatus.IMMINENT, C.FfcStatus.IN_PROGRESS) and time.monotonic() < deadline:
-                    time.sleep(0.05)
-                    status = client.call(C.GET_FFC_STATUS)
-                row["ffc_status"] = C.enum_name(status)
-                if status in (C.FfcStatus.IMMINENT, C.FfcStatus.IN_PROGRESS):
-                    row["error"] = "FFC did not complete in time"
-            else:
-                want = C.FfcMode[args.action.upper()]
-                row["before"] = C.enum_name(client.call(C.GET_FFC_MODE))
-                if row["before"] != args.action:
-                    client.call(C.SET_FFC_MODE, want)
-                row["ffc_mode"] = C.enum_name(client.call(C.GET_FFC_MODE))
-                if row["ffc_mode"] != args.action:
-                    row["error"] = f"FFC mode reads back {row['ffc_mode']}"
-    except BosonError as exc:
-        row["error"] = str(exc)
-    return row
-
-
 def cmd_ffc(args) -> int:
-    rows = _per_camera(_targets(args, rig_from_args(args)), lambda t: _ffc_one(t, args))
+    work = (lambda t, c: ops.run_ffc(c)) if args.action == "run" else (lambda t, c: ops.set_ffc_mode(c, args.action))
+    rows = _on_each(args, rig_from_args(args), work, row=lambda t: {"action": args.action})
     if args.json:
         print_json({"cameras": rows})
     elif not args.quiet:
         for r in rows:
             state = r.get("ffc_status", r.get("ffc_mode", "-"))
             print(f"{r['label']:<10} {args.action:<7} {'ok' if 'error' not in r else 'FAILED':<7} {state}")
-    for r in rows:
-        if "error" in r:
-            error(r["error"] if r["error"].startswith(r["label"]) else f"{r['label']}: {r['error']}")
-    return 1 if any("error" in r for r in rows) else 0
+    return _report_errors(rows)
 
 
 # ---------------------------------------------------------------------------- boson-restore-defaults
-def _restore_one(target, args) -> dict:
-    row: dict = {"label": target.label, "port": target.port}
-    try:
-        with _client(target, args) as client:
-            client.call(C.RESTORE_DEFAULTS)
-            if args.persist:
-                client.call(C.WRITE_FLASH)
-            row["sync_mode"] = C.enum_name(client.call(C.GET_EXT_SYNC))
-            row["ffc_mode"] = C.enum_name(client.call(C.GET_FFC_MODE))
-            row["persisted"] = args.persist
-    except BosonError as exc:
-        row["error"] = str(exc)
-    return row
-
-
 def cmd_restore(args) -> int:
     if not args.yes:
         raise UserError("boson-restore-defaults discards the cameras' current settings: add --yes to do it")
-    rows = _per_camera(_targets(args, rig_from_args(args)), lambda t: _restore_one(t, args))
+    rows = _on_each(args, rig_from_args(args), lambda t, c: ops.restore_defaults(c, args.persist))
     if args.json:
         print_json({"cameras": rows})
     elif not args.quiet:
@@ -365,10 +239,7 @@ def cmd_restore(args) -> int:
             if "error" not in r:
                 print(f"{r['label']:<10} factory settings restored{' and saved to flash' if args.persist else ''}"
                       f" (sync {r['sync_mode']}, FFC {r['ffc_mode']})")
-    for r in rows:
-        if "error" in r:
-            error(r["error"] if r["error"].startswith(r["label"]) else f"{r['label']}: {r['error']}")
-    return 1 if any("error" in r for r in rows) else 0
+    return _report_errors(rows)
 
 
 # ---------------------------------------------------------------------------- boson-raw
@@ -396,22 +267,8 @@ def cmd_raw(args) -> int:
     if len(targets) != 1:
         raise UserError(f"boson-raw talks to one camera; {len(targets)} match: choose with --camera or --port")
     target = targets[0]
-    cmd = C.BY_ID.get(fid)
-    doc: dict = {"label": target.label, "port": target.port, "function_id": f"0x{fid:08X}",
-                 "command": cmd.name if cmd else None, "request": payload.hex()}
-    try:
-        with _client(target, args) as client:
-            reply = client.call_raw(fid, payload, command=cmd)
-        doc.update(status="0x000", reply=reply.hex())
-        if cmd is not None and cmd.reply:
-            try:
-                doc["value"] = C.enum_name(cmd.decode_reply(reply))
-            except BosonError:
-                pass
-    except CameraError as exc:
-        doc.update(status=f"0x{exc.code:03X}", result=exc.result_name, error=str(exc))
-    except BosonError as exc:
-        doc.update(error=str(exc))
+    doc = ops.on_camera(target, _timeouts(args), args.retries, lambda c: ops.raw_call(c, fid, payload),
+                        **ops.raw_request(fid, payload))
     if args.json:
         print_json(doc)
     elif not args.quiet and "error" not in doc:
@@ -419,113 +276,3 @@ def cmd_raw(args) -> int:
     if "error" in doc:
         raise CheckFailed(f"{target.label}: {doc['error']}")
     return 0
-
-
-# ---------------------------------------------------------------------------- boson-emulator
-def cmd_emulator(args) -> int:
-    from ..boson.emulator import BosonState, EmulatedBoson, Trigger, parse_faults
-
-    rig = rig_from_args(args)
-    serials = args.serial or [93588]
-    if len(set(serials)) != len(serials) or any(s <= 0 or s > 0xFFFFFFFF for s in serials):
-        raise UserError("--serial: give distinct serial numbers between 1 and 4294967295")
-    try:
-        faults = parse_faults(args.faults)
-    except ValueError as exc:
-        raise UserError(f"--faults: {exc}") from None
-    if args.boot_seconds < 0:
-        raise UserError("--boot-seconds must be >= 0")
-    if args.session_out and not args.run:
-        raise UserError("--session-out records a --run session: add --run COMMAND ...")
-    trigger = Trigger(args.trigger_hz or rig.desc.sync.rate_hz, running=args.trigger)
-
-    temp_dir = None
-    by_id = args.by_id_dir or os.environ.get(discovery.BY_ID_ENV)
-    if not by_id:
-        temp_dir = tempfile.mkdtemp(prefix="boson-by-id.")
-        by_id = temp_dir
-
-    stage_cm = atomic.OutputDir(args.session_out) if args.session_out else None
-    stage = stage_cm.__enter__() if stage_cm else None
-    log_path = (stage / "session.log") if stage else args.log
-    log_file = open(log_path, "w") if log_path else None
-    lock = threading.Lock()
-    emus = []
-    try:
-        for i, sn in enumerate(serials):
-            state = BosonState(sn, trigger=trigger)
-            if args.persist_slave:
-                state.flash["ext_sync_mode"] = state.settings["ext_sync_mode"] = int(C.ExtSyncMode.SLAVE)
-            emus.append(EmulatedBoson(state, by_id_dir=by_id, faults=[parse_faults(f.spec())[0] for f in faults],
-                                      boot_s=args.boot_seconds, seed=args.seed + i, log=log_file,
-                                      log_lock=lock).start())
-        devices = [{"serial": e.serial, "path": e.path, "link": str(e.link)} for e in emus]
-        if args.run:
-            code = _run_session(args, by_id, devices, stage)
-        else:
-            _serve_forever(args, emus, trigger, by_id, devices)
-            code = 0
-    except BaseException:
-        for e in emus:
-            e.stop()
-        if log_file:
-            log_file.close()
-        if stage_cm:
-            stage_cm.__exit__(*sys.exc_info())
-        raise
-    for e in emus:
-        e.stop()
-    if log_file:
-        log_file.close()
-    if stage_cm:
-        stage_cm.__exit__(None, None, None)
-    if temp_dir:
-        import shutil
-        shutil.rmtree(temp_dir, ignore_errors=True)
-    return code
-
-
-def _serve_forever(args, emus, trigger, by_id, devices) -> None:
-    if args.json:
-        print_json({"by_id_dir": by_id, "devices": devices})
-    else:
-        for d in devices:
-            print(f"{d['serial']} {d['path']} {d['link']}")
-        print(f"# export {discovery.BY_ID_ENV}={by_id}  (so the boson-* commands find these cameras)")
-    sys.stdout.flush()
-    stop = threading.Event()
-    handlers = {signal.SIGTERM: lambda *_: stop.set(), signal.SIGINT: lambda *_: stop.set(),
-                signal.SIGUSR1: lambda *_: trigger.start(), signal.SIGUSR2: lambda *_: trigger.stop()}
-    old = {s: signal.signal(s, h) for s, h in handlers.items()}
-    try:
-        stop.wait(args.duration)
-    finally:
-        for s, h in old.items():
-            signal.signal(s, h)
-
-
-def _run_session(args, by_id, devices, stage) -> int:
-    argv = list(args.run)
-    if argv and argv[0] == "--":
-        argv = argv[1:]
-    if not argv:
-        raise UserError("--run needs a command, e.g. --run boson-config --slave")
-    env = dict(os.environ, **{discovery.BY_ID_ENV: by_id})
-    cmd = [sys.executable, "-m", "platform_tools.cli.main", *argv]
-    t0 = time.monotonic()
-    proc = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, text=True)
-    seconds = time.monotonic() - t0
-    if stage is None:
-        sys.stdout.write(proc.stdout)
-        return proc.returncode
-    try:
-        result = json.loads(proc.stdout)
-        (stage / "result.json").write_text(json.dumps(result, indent=2) + "\n")
-    except json.JSONDecodeError:
-        (stage / "result.txt").write_text(proc.stdout)
-    session = {"command": ["platform_tools", *argv], "exit_code": proc.returncode, "seconds": round(seconds, 3),
-               "by_id_dir": by_id, "devices": devices}
-    (stage / "session.json").write_text(json.dumps(session, indent=2) + "\n")
-    if not args.quiet:
-        print(f"{args.session_out}: exit {proc.returncode} in {seconds:.2f} s")
-    return proc.returncode

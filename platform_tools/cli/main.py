@@ -6,7 +6,8 @@ import argparse
 from typing import Sequence
 
 from platform_tools.rig.conventions import dispatch, tool_parser
-from . import boson_cmd, doctor_cmd, export_cmd, firmware_cmd, record_cmd, rig_cmd, simulate_cmd, synccheck_cmd
+from platform_tools.cli import boson_cmd, export_cmd, firmware_cmd, rig_cmd, simulate_cmd, synccheck_cmd
+from firmware.commands import doctor as doctor_cmd, record_service as record_cmd
 
 #: subcommand modules, in the order --help lists them
 COMMANDS = [rig_cmd, boson_cmd, firmware_cmd, doctor_cmd, record_cmd, simulate_cmd, synccheck_cmd, export_cmd]

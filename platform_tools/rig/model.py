@@ -72,6 +72,13 @@ class Rig:
         return body + 2 * (hs.wall_mm + hs.fin_height_mm)
 
     # ------------------------------------------------------------------ cameras
+    def boson_device_nodes(self, side: str) -> dict[str, str]:
+        """The names, relative to /dev, that the udev rules give the ``side`` ("left" or "right")
+        Boson: ``{"video": "<device_name>_video", "serial": "<device_name>_serial"}`` (its V4L2 video
+        node and its serial control port; device_name is sensors.thermal.<side>.device_name)."""
+        name = getattr(self.desc.sensors.thermal, side).device_name
+        return {"video": f"{name}_video", "serial": f"{name}_serial"}
+
     def camera_model(self, name: str) -> CameraModelSpec:
         return self.desc.camera_models[name]
 

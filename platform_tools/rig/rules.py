@@ -150,8 +150,12 @@ def printable_walls(rig: Rig) -> Iterator[Problem]:
 @rule
 def sync_trigger(rig: Rig) -> Iterator[Problem]:
     s = rig.desc.sync
-    if s.rate_hz > 60:
-        yield Problem(("sync", "rate_hz"), f"got {s.rate_hz:g} Hz; the Boson 640 runs at most 60 Hz; expected <= 60")
+    boson_id = rig.desc.sensors.thermal.part
+    boson = rig.desc.parts.get(boson_id)
+    top = boson.max_frame_rate_hz if boson is not None else None
+    if top is not None and s.rate_hz > top.value:
+        yield Problem(("sync", "rate_hz"), f"got {s.rate_hz:g} Hz; the {boson_id} runs at most {top.value:g} Hz "
+                                           f"(parts.{boson_id}.max_frame_rate_hz); expected <= {top.value:g}")
     if s.signal_pin == s.ground_pin:
         yield Problem(("sync", "ground_pin"), f"is pin {s.ground_pin}, the same as signal_pin")
     b = rig.desc.recording.button

@@ -116,6 +116,14 @@ class VoltageRange:
 
 
 @dataclass(frozen=True)
+class SourcedVoltRange:
+    """A vendor voltage range, each end with its provenance:
+    ``{min: {value: 3, source: ..., confidence: ...}, max: {value: 12, ...}}``."""
+    min: Annotated[Sourced, Unit("V"), Ge(0)]
+    max: Annotated[Sourced, Unit("V"), Ge(0)]
+
+
+@dataclass(frozen=True)
 class Part:
     kind: PartKind
     vendor: str
@@ -129,6 +137,10 @@ class Part:
     #: part-specific dimensions (a lens length, a rail width), each with its source
     dims: Mapping[str, Sourced] = field(default_factory=dict)
     mounting: tuple[MountingPattern, ...] = ()
+    #: a camera's highest frame rate (what its external sync can be triggered at), with its source
+    max_frame_rate_hz: Optional[Annotated[Sourced, Unit("Hz"), Gt(0)]] = None
+    #: a camera's external-sync input: the trigger pulse levels it accepts, with their source
+    sync_input_v: Optional[SourcedVoltRange] = None
 
 
 # ----------------------------------------------------------------------------- cameras

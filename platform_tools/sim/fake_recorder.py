@@ -1,10 +1,10 @@
 """A stand-in for `ros2 bag record` that writes a real MCAP and misbehaves on request.
 
-    python -m platform_tools.sim.fake_recorder -o BAG [--misbehave MODE] TOPIC...
+    python -m platform_tools.sim.fake_recorder -o BAG [--misbehave MODE] [--rig FILE] TOPIC...
 
 Like rosbag2 it creates the folder BAG, writes BAG/<name>_0.mcap (ROS 2 CDR messages: a small
-mono16 image per topic at --rate-hz), splits by size, and on SIGINT finishes the file (summary and
-index) and writes metadata.yaml, then exits 0. MODE:
+mono16 image per topic at --rate-hz, by default the rig's trigger rate), splits by size, and on
+SIGINT finishes the file (summary and index) and writes metadata.yaml, then exits 0. MODE:
 
 - ``none``            behave
 - ``hang-on-sigint``  ignore SIGINT and SIGTERM: only SIGKILL stops it (the file is left without summary)
@@ -24,6 +24,7 @@ import numpy as np
 import yaml
 from mcap_ros2.writer import Writer
 
+from platform_tools.rig.conventions import add_rig_options, rig_from_args
 from platform_tools.sim import msgs
 
 
@@ -31,10 +32,12 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="fake_recorder", description=__doc__.split("\n\n")[0])
     p.add_argument("-o", "--output", required=True, type=Path)
     p.add_argument("topics", nargs="+")
-    p.add_argument("--rate-hz", type=float, default=30.0)
+    p.add_argument("--rate-hz", type=float, help="frames per second per topic (default: sync.rate_hz, the rig's "
+                                                  "trigger rate, from --rig / --set)")
     p.add_argument("--max-bag-size", type=int, default=0, help="split after this many bytes (0: never)")
     p.add_argument("--misbehave", default="none")
     p.add_argument("--fill-mb-s", type=float, default=40.0)
+    add_rig_options(p)
     return p.parse_args(argv)
 
 
@@ -97,13 +100,14 @@ def main(argv: list[str] | None = None) -> int:
     except FileExistsError:
         print(f"fake_recorder: {args.output} exists (ros2 bag record refuses too)", file=sys.stderr)
         return 1
+    rate_hz = args.rate_hz or rig_from_args(args).desc.sync.rate_hz
     bag = Bag(args.output, args.max_bag_size)
     print(f"fake_recorder: recording {len(args.topics)} topics to {args.output} (pid {os.getpid()})",
           file=sys.stderr, flush=True)
     rng = np.random.default_rng(0)
     frame = rng.integers(0, 2**14, (24, 32), dtype=np.uint16)
     filler = rng.integers(0, 2**16, (512, 1024), dtype=np.uint16)   # 1 MiB, incompressible
-    period = 1.0 / args.rate_hz
+    period = 1.0 / rate_hz
     t0 = time.time_ns()
     start = time.monotonic()
     n = 0

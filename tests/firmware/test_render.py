@@ -199,7 +199,7 @@ def test_dockerfiles_follow_the_rig_and_compose_builds_them():
     assert "Jetson.GPIO" in files["docker/tools/Dockerfile"]
     # this repository's source is in the build context the thermal and tools images COPY
     assert "docker/src/rgbt-rig/pyproject.toml" in files
-    assert "docker/src/rgbt-rig/platform_tools/telemetry/node.py" in files
+    assert "docker/src/rgbt-rig/firmware/device/ffc_node.py" in files
     assert not any("__pycache__" in p for p in files)
 
 
@@ -232,3 +232,40 @@ def test_the_status_publisher_is_launched_for_each_side(default_render):
         assert cmd[:3] == ["python3", "-m", "firmware.device.ffc_node"]
         assert f"image_topic:=/thermal/{side}/image_raw" in cmd and f"status_topic:=/thermal/{side}/status" in cmd
         assert "telemetry_rows:=2" in cmd
+
+
+def test_the_images_install_only_firmware_and_what_it_imports(tmp_path):
+    """The build context holds firmware, platform_tools.rig and platform_tools.boson, nothing else of
+    this repository, and every on-device module imports from it alone (no platform_tools.cli, dataset,
+    sim): run in a fresh process whose only copy of this repository is the rendered context."""
+    import subprocess
+    import sys
+    rig = load_rig(None, [SERIALS[1], SERIALS[3]])
+    write(rig, tmp_path / "fw")
+    src = tmp_path / "fw" / "docker" / "src" / "rgbt-rig"
+    packages = {p.parent.relative_to(src).as_posix() for p in src.rglob("__init__.py")}
+    top = {p for p in packages if not any(p.startswith(q + "/") for q in packages)}
+    assert top == {"firmware", "platform_tools"}
+    assert {p for p in packages if p.count("/") == 1 and p.startswith("platform_tools/")} == \
+        {"platform_tools/rig", "platform_tools/boson"}
+    modules = sorted(".".join(p.relative_to(src).with_suffix("").parts) for p in (src / "firmware").rglob("*.py")
+                     if p.name != "__init__.py" and p.stem != "ffc_node")     # ffc_node needs rclpy
+    probe = ("import importlib, sys\n"
+             f"for m in {modules!r}: importlib.import_module(m)\n"
+             "ours = [m for m in sys.modules if m.split('.')[0] in ('firmware', 'platform_tools', 'calibration', "
+             "'cad', 'bom')]\n"
+             f"outside = [m for m in ours if not (sys.modules[m].__file__ or '').startswith({str(src)!r})]\n"
+             "assert not outside, outside\n"
+             "from firmware.cli import main\n"
+             "raise SystemExit(main(['--help']))\n")
+    r = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(src)),
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert "record-service" in r.stdout and "doctor" in r.stdout
+
+
+def test_the_device_command_is_what_compose_runs(default_render):
+    compose = yaml.safe_load((default_render / "compose.yaml").read_text())["services"]
+    assert compose["recorder"]["command"][1:3] == ["rig-device", "record-service"]
+    assert compose["health"]["command"][1:3] == ["rig-device", "doctor"]
+    assert 'rig-device = "firmware.cli:main"' in (Path(__file__).parents[2] / "pyproject.toml").read_text()

@@ -150,10 +150,11 @@ def test_a_frame_without_telemetry_is_an_error_status():
 
 
 def test_the_node_module_is_only_glue():
-    """node.py needs rclpy (device only); its logic lives in status.py. Check it parses and uses it."""
-    src = (Path(D.__file__).parent / "node.py").read_text()
+    """ffc_node.py needs rclpy (device only); its logic lives in ffc_status.py. Check it parses and uses it."""
+    import firmware.device.ffc_status as status
+    src = (Path(status.__file__).parent / "ffc_node.py").read_text()
     tree = ast.parse(src)
     imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)} | \
         {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
-    assert {"rclpy", "sensor_msgs.msg", "diagnostic_msgs.msg", "status"} <= imported
+    assert {"rclpy", "sensor_msgs.msg", "diagnostic_msgs.msg", "firmware.device.ffc_status"} <= imported
     assert "StatusTracker" in src and "def main" in src

@@ -10,8 +10,10 @@ from __future__ import annotations
 import threading
 import time
 from dataclasses import dataclass, field
+from typing import Callable
 
 from .. import commands as C
+from .. import fslp
 from .trigger import Trigger
 
 #: factory settings (FFC AUTO, external sync off, continuous display, 16-bit video, telemetry off)
@@ -176,3 +178,20 @@ class BosonState:
         if name == "bosonReboot":
             return Outcome(0, reboot=True)
         return Outcome(BAD_COMMAND_ID)     # in the table but not emulated
+
+
+def answer_with(state: BosonState) -> Callable[[bytes], list[bytes]]:
+    """A loopback responder (platform_tools.boson.loopback): request bytes in, the encoded replies of
+    ``state`` out, one chunk per reply (no faults, no reboot: the pty device adds those)."""
+    decoder = fslp.StreamDecoder()
+
+    def respond(data: bytes) -> list[bytes]:
+        out = []
+        for item in decoder.feed(data):
+            if isinstance(item, fslp.FslpError) or item.channel != fslp.CHANNEL_COMMAND or not item.is_request:
+                continue
+            outcome = state.handle(item.function_id, item.payload)
+            out.append(fslp.encode(fslp.reply(item, outcome.status, outcome.payload)))
+        return out
+
+    return respond

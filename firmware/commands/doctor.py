@@ -1,4 +1,5 @@
-"""`platform_tools doctor`: the recorder's pre-flight checks on demand, as a table or JSON."""
+"""`rig-device doctor` (`platform_tools doctor` on a workstation): the recorder's pre-flight checks on
+demand, as a table or JSON."""
 from __future__ import annotations
 
 import argparse

@@ -1,19 +1,21 @@
-"""`platform_tools record-service`: the button-driven recorder that runs on the Orin."""
+"""`rig-device record-service` (`platform_tools record-service` on a workstation): the button-driven
+recorder that runs on the Orin."""
 from __future__ import annotations
 
 import argparse
 import logging
+import os
 import signal
 import threading
 from pathlib import Path
 
+from firmware.commands.doctor import add_preflight_options
 from firmware.device.bagproc import backend_from_spec
 from firmware.device.button import Button
 from firmware.device.gpio import GpioError, open_gpio
 from firmware.device.preflight import run_preflight
 from firmware.device.recorder import ButtonLoop, Recorder
 from platform_tools.rig.conventions import UserError, add_output_options, add_rig_options, rig_from_args
-from .doctor_cmd import add_preflight_options
 
 log = logging.getLogger("platform_tools.recorder")
 
@@ -70,7 +72,7 @@ def cmd_record_service(args: argparse.Namespace) -> int:
     recovered = recorder.recover_interrupted()
     loop = ButtonLoop(recorder, gpio, Button(button_cfg.bounce_ms / 1000.0, button_cfg.long_press_s, active_low),
                       button_cfg.gpio_pin, button_cfg.led_pin)
-    recorder.event("ready", pid=__import__("os").getpid(), recovered=recovered, recorder=backend.name)
+    recorder.event("ready", pid=os.getpid(), recovered=recovered, recorder=backend.name)
     try:
         loop.run(stop)
     finally:

@@ -1,0 +1,31 @@
+"""`rig-device`: the commands the Orin runs, from the on-device images (the recorder and health
+containers of compose.yaml). It imports only firmware and the ground floor (platform_tools.rig,
+platform_tools.boson): the images install nothing else. On a workstation the same commands are
+`platform_tools doctor` and `platform_tools record-service`.
+
+    rig-device record-service [--rig FILE] ...   the record button and the recorder
+    rig-device doctor [--rig FILE] [--json] ...  the pre-flight checks
+"""
+from __future__ import annotations
+
+import argparse
+from typing import Sequence
+
+from firmware.commands import doctor, record_service
+from platform_tools.rig.conventions import dispatch, tool_parser
+
+#: subcommand modules, in the order --help lists them
+COMMANDS = [record_service, doctor]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    return tool_parser("rig-device", "The on-device commands of the handheld RGB-thermal rig: the record "
+                       "button's recorder and the pre-flight checks.", COMMANDS)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    return dispatch(build_parser(), argv)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,151 @@
+"""The client, the sync set-up and the camera operations on bytes, through the in-memory loopback
+transport: no pty, no thread, no timing but the timeouts asked for."""
+from __future__ import annotations
+
+import pytest
+
+from platform_tools.boson import codes, fslp, operations as ops, syncsetup
+from platform_tools.boson import commands as C
+from platform_tools.boson.client import BosonClient, Timeouts
+from platform_tools.boson.emulator import BosonState, answer_with
+from platform_tools.boson.loopback import LoopbackTransport
+
+FAST = Timeouts(first_s=0.02, rest_s=0.02, slow_s=0.05, reopen_s=0.1)
+
+
+def client_for(respond, retries: int = 3) -> tuple[BosonClient, LoopbackTransport]:
+    port = LoopbackTransport(respond)
+    return BosonClient(port, timeouts=FAST, retries=retries, backoff_s=0.0).open(), port
+
+
+def camera(serial: int = 93588, **state) -> tuple[BosonClient, LoopbackTransport, BosonState]:
+    s = BosonState(serial, **state)
+    client, port = client_for(answer_with(s))
+    return client, port, s
+
+
+def scripted(*answers):
+    """A responder that answers the n-th request with answers[n](request frame) (bytes chunks)."""
+    decoder, calls = fslp.StreamDecoder(), []
+
+    def respond(data: bytes) -> list[bytes]:
+        (req,) = decoder.feed(data)
+        calls.append(req)
+        return answers[min(len(calls), len(answers)) - 1](req)
+    respond.calls = calls
+    return respond
+
+
+def ok(payload: bytes):
+    return lambda req: [fslp.encode(fslp.reply(req, 0, payload))]
+
+
+SN = (93588).to_bytes(4, "big")
+
+
+def test_a_request_is_one_fslp_frame_and_its_reply_is_decoded():
+    client, port, _ = camera()
+    assert client.call(C.GET_CAMERA_SN) == 93588
+    (frame,) = fslp.StreamDecoder().feed(port.written[0])
+    assert (frame.function_id, frame.sequence, frame.is_request) == (C.GET_CAMERA_SN.function_id, 1, True)
+
+
+def test_a_stale_reply_is_discarded_and_the_matching_one_taken():
+    stale = lambda req: [fslp.encode(fslp.Frame(req.channel, fslp.next_sequence(req.sequence + 5),  # noqa: E731
+                                                req.function_id, 0, b"\0\0\0\1")),
+                         fslp.encode(fslp.reply(req, 0, SN))]
+    client, _ = client_for(scripted(stale))
+    assert client.call(C.GET_CAMERA_SN) == 93588
+    assert client.stats.discarded == 1 and client.stats.retries == 0
+
+
+def test_a_reply_split_into_single_bytes_is_reassembled():
+    client, _ = client_for(lambda data: [bytes([b]) for b in fslp.encode(
+        fslp.reply(fslp.StreamDecoder().feed(data)[0], 0, SN))])
+    assert client.call(C.GET_CAMERA_SN) == 93588
+
+
+def test_busy_then_ok_is_retried_with_a_new_sequence_number():
+    respond = scripted(lambda req: [fslp.encode(fslp.reply(req, 0x283))], ok(SN))
+    client, _ = client_for(respond)
+    assert client.call(C.GET_CAMERA_SN) == 93588
+    assert client.stats.retries == 1 and [r.sequence for r in respond.calls] == [1, 2]
+
+
+def test_a_corrupt_reply_counts_as_a_bad_frame_and_is_retried():
+    def corrupt(req):
+        rep = fslp.reply(req, 0, SN)
+        return [fslp.encode(rep, crc=fslp.crc16(fslp.encode_body(rep)[:-2]) ^ 0x5A5A)]
+    client, _ = client_for(scripted(corrupt, ok(SN)))
+    assert client.call(C.GET_CAMERA_SN) == 93588
+    assert client.stats.bad_frames == 1 and client.stats.retries == 1
+
+
+def test_no_answer_gives_up_after_every_retry():
+    client, port = client_for(lambda data: [], retries=2)
+    with pytest.raises(codes.ReplyTimeout, match="gave up after 3 attempts"):
+        client.call(C.GET_CAMERA_SN)
+    assert len(port.written) == 3
+
+
+def test_a_camera_error_is_raised_by_name_without_retry():
+    client, port, _ = camera()
+    with pytest.raises(codes.RangeError):
+        client.call(C.SET_EXT_SYNC, 7)
+    assert len(port.written) == 1
+
+
+def test_a_vanished_port_is_reopened_and_the_command_sent_again():
+    client, port, _ = camera()
+    port.vanish()
+    assert client.call(C.GET_CAMERA_SN) == 93588
+    assert client.stats.reopens == 1 and port.reopens == 1
+
+
+def test_camera_info_reads_the_table_and_checks_the_serial():
+    client, _, state = camera(fpa_temp_c_x10=-153)
+    info = ops.camera_info(client, 93588)
+    assert info["serial"] == 93588 and info["fpa_temp_c"] == -15.3 and info["sync_mode"] == "disable"
+    assert "error" not in info
+    assert ops.camera_info(client, 11111, ("serial",))["error"] == "answers as SN 93588, not SN 11111"
+
+
+def test_sync_setup_on_bytes_configures_then_finds_nothing_to_do(rig):
+    plan = syncsetup.plan_for(rig, mode="slave", persist=False)
+    client, port, state = camera()
+    first = syncsetup.configure(client, 93588, plan, syncsetup.CameraResult("left", port.path))
+    assert first.status == "configured" and state.settings["ext_sync_mode"] == int(C.ExtSyncMode.SLAVE)
+    assert [c["setting"] for c in first.changes][0] == "ext_sync_mode"
+    again = syncsetup.configure(client, 93588, plan, syncsetup.CameraResult("left", port.path))
+    assert again.status == "unchanged" and again.changes == []
+
+
+def test_sync_setup_refuses_a_camera_with_another_serial(rig):
+    client, port, state = camera(11111)
+    result = syncsetup.configure(client, 93588, syncsetup.plan_for(rig, mode="slave", persist=False),
+                                 syncsetup.CameraResult("left", port.path))
+    assert result.status == "error" and "SN 11111" in result.error
+    assert state.settings["ext_sync_mode"] == int(C.ExtSyncMode.DISABLE)      # nothing written
+
+
+def test_ffc_mode_is_written_only_when_it_differs():
+    client, port, _ = camera()
+    assert ops.set_ffc_mode(client, "manual") == {"before": "auto", "ffc_mode": "manual"}
+    writes = len(port.written)
+    assert ops.set_ffc_mode(client, "manual") == {"before": "manual", "ffc_mode": "manual"}
+    assert len(port.written) == writes + 2          # two reads, no write
+
+
+def test_raw_call_reports_a_camera_error_in_the_row():
+    client, _, _ = camera()
+    row = ops.raw_call(client, 0x00051234, b"")
+    assert row["status"] == "0x161" and "error" in row
+    assert ops.raw_call(client, C.GET_CAMERA_SN.function_id, b"")["value"] == 93588
+
+
+def test_a_plan_that_cannot_be_done_is_one_line(rig):
+    with pytest.raises(ValueError, match="applies to --slave"):
+        syncsetup.plan_for(rig, mode="master", check_trigger_s=0.5)
+    with pytest.raises(ValueError, match="use it with --persist"):
+        syncsetup.plan_for(rig, persist=False, reboot_verify=True)
+    assert syncsetup.plan_for(rig, mode="slave", check_trigger_s=0.5).check_trigger.rate_hz == rig.desc.sync.rate_hz
