@@ -12,7 +12,7 @@ from typing import Iterator
 from platform_tools.rig.problems import InputProblems
 from platform_tools.rig import Rig
 from platform_tools.rig.typed import Problem, closest, convert
-from platform_tools.rig.yamlsource import YamlSource, YamlSourceError, load_yaml_file
+from platform_tools.rig.yamlsource import YamlSource, load_typed
 
 from .catalogue_schema import Catalogue, CatalogueEntry
 
@@ -48,18 +48,8 @@ class LoadedCatalogue:
 
 def load_catalogue(rig: Rig, path: Path | str | None = None) -> LoadedCatalogue:
     path = Path(path) if path is not None else DEFAULT_CATALOGUE
-    try:
-        source = load_yaml_file(path)
-    except YamlSourceError as exc:
-        raise CatalogueError([str(exc)]) from None
-    if not isinstance(source.data, dict):
-        raise CatalogueError([f"{path}: expected a YAML mapping at the top level"])
-    cat, problems = convert(Catalogue, source.data)
-    if not problems:
-        problems = list(_rules(cat, rig))
-    if problems:
-        raise CatalogueError([f"{source.where(p.path)}: {p}" for p in problems])
-    return LoadedCatalogue(cat, source)
+    typed = load_typed(path, Catalogue, CatalogueError, rules=lambda cat: _rules(cat, rig))
+    return LoadedCatalogue(typed.value, typed.source)
 
 
 def _rules(cat: Catalogue, rig: Rig) -> Iterator[Problem]:

@@ -1,4 +1,5 @@
-"""Write the BOM (csv, md, html) and share the jinja2 environment with the assembly guide."""
+"""Write the BOM (csv, md, html); its jinja2 environment and page base are shared with the assembly guide
+(docs.guide), which adds its own templates folder."""
 from __future__ import annotations
 
 import csv
@@ -13,8 +14,11 @@ from .bom import Bom
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 
 
-def environment() -> jinja2.Environment:
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(str(TEMPLATES)), undefined=jinja2.StrictUndefined,
+def environment(*template_dirs: Path) -> jinja2.Environment:
+    """The BOM's templates (bom/templates: the page base, the BOM tables, the style sheet), after any
+    ``template_dirs`` (searched first)."""
+    search = [str(d) for d in template_dirs] + [str(TEMPLATES)]
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(search), undefined=jinja2.StrictUndefined,
                              autoescape=jinja2.select_autoescape(enabled_extensions=("html.j2", "html"),
                                                                  default_for_string=False),
                              trim_blocks=False, lstrip_blocks=False, keep_trailing_newline=True,

@@ -16,12 +16,10 @@ import numpy as np
 from platform_tools.rig.frames import Pose
 from platform_tools.rig import Rig
 
-from . import design
 from .cache import ShapeCache
-from .design import Layout
+from .layout import Layout, layout
 from .geom import moved
 from .parts import camera_mounts, case, cooling, handle, power_mounts
-from .vendor.fasteners import Insert, Screw
 
 PETG = (0.93, 0.45, 0.10, 1.0)       # printed parts
 PETG_DARK = (0.22, 0.22, 0.24, 1.0)  # case
@@ -86,8 +84,8 @@ class Assembly:
 
 
 def build(rig: Rig, cache: ShapeCache | None = None) -> Assembly:
-    """Lay out and place every part. Raises :class:`cad.design.DesignError` for impossible values."""
-    lay = design.layout(rig)
+    """Lay out and place every part. Raises :class:`cad.layout.DesignError` for impossible values."""
+    lay = layout(rig)
     nodes: list[Node] = []
     I = Pose.identity()
 
@@ -96,55 +94,57 @@ def build(rig: Rig, cache: ShapeCache | None = None) -> Assembly:
         return nodes[-1]
 
     # cameras
-    z = add("zed_x", lay.zed.part_id, "bought", "cameras", lay.zed, lay.zed_pose, lay.zed.colour)
-    z.optical = {f"zed_x_{k}_optical": v for k, v in lay.zed.optical_frames().items()}
+    z = add("zed_x", lay.cameras.zed.part_id, "bought", "cameras", lay.cameras.zed, lay.cameras.zed_pose, lay.cameras.zed.colour)
+    z.optical = {f"zed_x_{k}_optical": v for k, v in lay.cameras.zed.optical_frames().items()}
     hs = cooling.heat_sink(lay)
-    for side, t in lay.thermal.items():
-        n = add(f"boson_{side}", lay.core.part_id, "bought", "cameras", lay.core, t.pose, lay.core.colour)
-        n.optical = {f"thermal_{side}_optical": lay.core.optical_frames()["optical"]}
-        add(f"boson_lens_{side}", lay.lens.part_id, "bought", "cameras", lay.lens, t.pose, lay.lens.colour)
+    for side, t in lay.cameras.thermal.items():
+        n = add(f"boson_{side}", lay.cameras.core.part_id, "bought", "cameras", lay.cameras.core, t.pose, lay.cameras.core.colour)
+        n.optical = {f"thermal_{side}_optical": lay.cameras.core.optical_frames()["optical"]}
+        add(f"boson_lens_{side}", lay.cameras.lens.part_id, "bought", "cameras", lay.cameras.lens, t.pose, lay.cameras.lens.colour)
         add(f"heat_sink_{side}", hs.part_id, "machined", "cooling", hs, t.pose, COPPER,
             material=rig.desc.enclosure.heat_sink.material)
-        add(f"fan_{side}", lay.fan_part.part_id, "bought", "cooling", lay.fan_part, t.fan_pose, lay.fan_part.colour)
+        add(f"fan_{side}", lay.cooling.part.part_id, "bought", "cooling", lay.cooling.part, lay.cooling.fans[side].pose,
+            lay.cooling.part.colour)
         add(f"fan_mount_{side}", f"fan_mount_{side}", "printed", "cooling", cooling.fan_mount(lay, side))
     add("zed_mount", "zed_mount", "printed", "mounts", camera_mounts.zed_mount(lay))
     add("thermal_mount", "thermal_mount", "printed", "mounts", camera_mounts.thermal_mount(lay))
     # compute
-    add("jetson_agx_orin", lay.orin.part_id, "bought", "compute", lay.orin, lay.orin_pose, lay.orin.colour)
-    add("zed_link_quad", lay.card.part_id, "bought", "compute", lay.card, lay.card_pose, lay.card.colour)
+    add("jetson_agx_orin", lay.compute.orin.part_id, "bought", "compute", lay.compute.orin, lay.compute.orin_pose, lay.compute.orin.colour)
+    add("zed_link_quad", lay.compute.card.part_id, "bought", "compute", lay.compute.card, lay.compute.card_pose, lay.compute.card.colour)
     so = power_mounts.standoff(lay)
-    for k, pt in enumerate(lay.orin.mount_points()):
-        p = lay.orin_pose.apply(np.array(pt))
-        add(f"orin_standoff_{k}", so.part_id, "printed", "compute", so, Pose(np.eye(3), (p[0], p[1], lay.interior.lo[2])))
+    for k, pt in enumerate(lay.compute.orin.mount_points()):
+        p = lay.compute.orin_pose.apply(np.array(pt))
+        add(f"orin_standoff_{k}", so.part_id, "printed", "compute", so, Pose(np.eye(3), (p[0], p[1], lay.case.interior.lo[2])))
     # power
-    add("dc_converter", lay.converter.part_id, "bought", "power", lay.converter, lay.converter_pose, lay.converter.colour)
-    add("blade_fuse", lay.fuse.part_id, "bought", "power", lay.fuse, lay.fuse_pose, lay.fuse.colour)
+    add("dc_converter", lay.power.converter.part_id, "bought", "power", lay.power.converter, lay.power.converter_pose, lay.power.converter.colour)
+    add("blade_fuse", lay.power.fuse.part_id, "bought", "power", lay.power.fuse, lay.power.fuse_pose, lay.power.fuse.colour)
     add("battery_mount", "battery_mount", "printed", "power", power_mounts.battery_mount(lay))
-    add("makita_adapter", lay.adapter.part_id, "bought", "power", lay.adapter, lay.adapter_pose, lay.adapter.colour)
-    add("makita_battery", lay.battery.part_id, "bought", "power", lay.battery, lay.battery_pose, lay.battery.colour)
+    add("makita_adapter", lay.power.adapter.part_id, "bought", "power", lay.power.adapter, lay.power.adapter_pose, lay.power.adapter.colour)
+    add("makita_battery", lay.power.battery.part_id, "bought", "power", lay.power.battery, lay.power.battery_pose, lay.power.battery.colour)
     # controls
-    for name, (part, pose) in lay.panel_parts.items():
+    for name, (part, pose) in lay.controls.items():
         add(name, part.part_id, "bought", "controls", part, pose, part.colour)
     # case and handles
     spec = case.case_spec(lay)
     add("case_lower", "case_lower", "printed", "case", case.CaseHalf("case_lower", "lower", spec), colour=PETG_DARK)
     add("case_lid", "case_lid", "printed", "case", case.CaseHalf("case_lid", "upper", spec), colour=PETG_DARK)
     hd = handle.handle(lay)
-    for name, pose in lay.handle_poses.items():
+    for name, pose in lay.handles.poses.items():
         add(f"handle_{name}", hd.part_id, "printed", "handles", hd, pose)
     # fasteners, from the joints
-    _add_fasteners(rig, lay, add)
+    _add_fasteners(lay, add)
     return Assembly(rig, lay, nodes, cache or ShapeCache())
 
 
-def _add_fasteners(rig: Rig, lay: Layout, add) -> None:
-    insert = Insert.from_rig(rig, rig.desc.enclosure.insert, "M3")
+def _add_fasteners(lay: Layout, add) -> None:
+    """The screw (and insert) each joint holds, as placed nodes whose spec is the fastener itself."""
     for j in lay.joints:
-        screw = Screw.from_rig(rig, j.screw_id, j.thread, j.length_mm)
-        add(f"screw_{j.name}", j.screw_id, "fastener", "fasteners", screw, j.pose(), screw.colour,
+        screw = j.screw
+        add(f"screw_{j.name}", screw.part_id, "fastener", "fasteners", screw, j.pose(), screw.colour,
             length_mm=j.length_mm, thread=j.thread, joint=j.name, host=j.host, kind=j.kind)
-        if j.kind == "insert":
-            add(f"insert_{j.name}", insert.part_id, "fastener", "fasteners", insert, j.insert_pose(), insert.colour,
+        if j.insert is not None:
+            ins = j.insert
+            add(f"insert_{j.name}", ins.part_id, "fastener", "fasteners", ins, j.insert_pose(), ins.colour,
                 thread=j.thread, joint=j.name, host=j.host)
 
 
@@ -176,8 +176,7 @@ def assembly_tree(asm: Assembly, *, volumes: bool = True) -> dict:
         groups.append(dict(name=g, children=leaves))
     counts: dict[str, int] = {}
     for n in asm.nodes:
-        key = n.part_id if n.category != "fastener" or "length_mm" not in n.props else \
-            f"{n.part_id}:{n.props['thread']}x{n.props['length_mm']:g}"
+        key = n.spec.bom_key if n.category == "fastener" else n.part_id
         counts[key] = counts.get(key, 0) + 1
     printed = {}
     p = rig.desc.printing.printer

@@ -4,146 +4,32 @@
     python cad/build.py check [--report FILE] [--json]
     python cad/build.py params [--json]
     python cad/build.py bom [--out DIR]     (bill of materials, bom/cli.py)
-    python cad/build.py docs [--out DIR]    (assembly guide, BOM, wiring, printing pages)
+    python cad/build.py docs [--out DIR]    (assembly guide, BOM, wiring, printing pages; docs/guide/cli.py)
 
 Exit codes: 0 ok, 1 a check failed, 2 bad input (a bad --set, an impossible design, an unwritable
 output folder, an unknown format).
+
+A shim: it only gathers the commands of cad/cli.py, bom/cli.py and docs/guide/cli.py into one tool
+(the one module of cad/ allowed to reach bom and docs.guide, which stand on cad).
 """
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
-if __package__ in (None, ""):  # run as a script from the repo root: make `cad` and `platform_tools` importable
+if __package__ in (None, ""):
+    # `python cad/build.py` puts cad/ (not the checkout) first on sys.path; the packages it gathers
+    # (cad, bom, docs, platform_tools) are top-level folders of the checkout, so add the checkout.
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from platform_tools.rig.atomic import OutputDir, write_text  # noqa: E402
-from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, dispatch, print_json,
-    rig_from_args)
-
-DEFAULT_OUT = Path(__file__).resolve().parents[1] / "build" / "cad"
+from platform_tools.rig.conventions import dispatch, tool_parser  # noqa: E402
 
 
-def _assembly(args):
-    from cad.assembly import build
-    from cad.cache import ShapeCache
-    from cad.design import DesignError
-    rig = rig_from_args(args)
-    try:
-        return build(rig, ShapeCache(enabled=not args.no_cache))
-    except DesignError as exc:
-        raise UserError("the design cannot be built from these values:\n" + "\n".join(str(p) for p in exc.problems)) from None
-
-
-def cmd_export(args) -> int:
-    from cad.export import FORMATS, export
-    fmt = args.format.upper()
-    if fmt != "ALL" and fmt not in FORMATS:
-        raise UserError(f"unknown export format {args.format!r}; expected one of {', '.join(FORMATS)} or all")
-    formats = set(FORMATS) if fmt == "ALL" else {fmt}
-    if args.tolerance <= 0 or args.angular_tolerance <= 0:
-        raise UserError("--tolerance and --angular-tolerance must be > 0 (mm and radians)")
-    asm = _assembly(args)
-    with OutputDir(args.out) as stage:
-        files = export(asm, stage, formats, args.tolerance, args.angular_tolerance)
-        names = [str(args.out / f.relative_to(stage)) for f in files]
-    if args.json:
-        print_json({"out": str(args.out), "files": names, "cache": {"hits": asm.cache.hits, "misses": asm.cache.misses}})
-    elif not args.quiet:
-        print("\n".join(names))
-    return 0
-
-
-def cmd_check(args) -> int:
-    from cad.checks import CheckResult, report, run_checks
-    from cad.design import DesignError, design_problems
-    rig = rig_from_args(args)
-    problems = design_problems(rig)
-    if problems:
-        results = [CheckResult("design constraints", False, f"{len(problems)} constraints broken",
-                               [str(p) for p in problems])]
-    else:
-        try:
-            results = run_checks(_assembly(args))
-        except UserError:
-            raise
-    text = report(results, verbose=args.verbose > 0)
-    if args.report:
-        write_text(args.report, text)
-    if args.json:
-        print_json([dict(name=r.name, ok=r.ok, summary=r.summary, details=r.details) for r in results])
-    elif not args.quiet:
-        sys.stdout.write(text)
-    return 0 if all(r.ok for r in results) else 1
-
-
-def cmd_params(args) -> int:
-    from cad.design import C, layout
-    from cad.assembly import camera_frames
-    rig = rig_from_args(args)
-    lay = layout(rig) if not args.rig_only else None
-    doc = {"rig": rig.to_data(), "rig_hash": rig.hash, "overrides": list(rig.overrides)}
-    if lay is not None:
-        from cad.vendor.base import provenance
-        doc["vendor_dimensions"] = [vars(r) for pid in rig.desc.parts for r in provenance(rig, pid)]
-        doc["design_constants"] = dict(vars(C))
-        doc["derived"] = {
-            "case_outer_mm": {"lo": lay.outer.lo, "hi": lay.outer.hi, "size": lay.outer.size},
-            "case_split_z_mm": lay.split_z,
-            "orin_standoff_mm": lay.standoff_h,
-            "vent_slots": len(lay.vents),
-            "joints": len(lay.joints),
-            "screws": {j.name: f"{j.thread} x {j.length_mm:g}" for j in lay.joints},
-        }
-    import json
-    doc = json.loads(json.dumps(doc, default=lambda v: float(v) if hasattr(v, "__float__") else str(v)))
-    if args.json:
-        print_json(doc)
-        return 0
-    import yaml
-    sys.stdout.write(yaml.safe_dump(doc, sort_keys=False, default_flow_style=None, width=110))
-    return 0
-
-
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="cad/build.py", description=__doc__.split("\n\n")[0],
-                                epilog="Exit codes: 0 ok, 1 a check failed, 2 bad input or usage.")
-    sub = p.add_subparsers(title="commands", metavar="COMMAND")
-
-    e = sub.add_parser("export", help="write STEP, STL, GLB, SVG, PNG (or all) to --out",
-                       description="Export the assembly (one STEP with named, coloured parts; a GLB), every printed "
-                                   "part as STEP and STL in its print orientation, and SVG/PNG views. The output "
-                                   "folder is replaced whole, only when everything was written.")
-    e.add_argument("format", metavar="FORMAT", help="STEP, STL, GLB, SVG, PNG or all")
-    e.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: build/cad)")
-    e.add_argument("--tolerance", type=float, default=0.1, help="mesh linear tolerance for STL/GLB/PNG (mm)")
-    e.add_argument("--angular-tolerance", type=float, default=0.2, help="mesh angular tolerance (radians)")
-    e.add_argument("--no-cache", action="store_true", help="rebuild every part (ignore the build cache)")
-    add_rig_options(e)
-    add_output_options(e)
-    e.set_defaults(handler=cmd_export)
-
-    c = sub.add_parser("check", help="check the assembly; exit 1 with a report if anything fails",
-                       description="Valid solids, interference (intended overlaps measured), minimum wall, heat sink "
-                                   "/ fan / wall clearances, print bed, fields of view, battery removal, vent area, "
-                                   "mass and balance, and the list of estimates.")
-    c.add_argument("--report", type=Path, help="also write the report to this file")
-    c.add_argument("--no-cache", action="store_true", help="rebuild every part (ignore the build cache)")
-    add_rig_options(c)
-    add_output_options(c)
-    c.set_defaults(handler=cmd_check)
-
-    r = sub.add_parser("params", help="every resolved parameter (rig values, design constants, derived sizes)",
-                       description="Print the resolved rig description, the design's own constants and derived sizes.")
-    r.add_argument("--rig-only", action="store_true", help="only the rig description (no layout)")
-    add_rig_options(r)
-    add_output_options(r)
-    r.set_defaults(handler=cmd_params)
-
-    from bom.cli import register as register_bom   # `bom` and `docs` (bom/cli.py)
-    register_bom(sub)
-    return p
+def build_parser():
+    from bom import cli as bom_cli
+    from cad import cli as cad_cli
+    from docs.guide import cli as docs_cli
+    return tool_parser("cad/build.py", __doc__.split("\n\n")[0], [cad_cli, bom_cli, docs_cli])
 
 
 def main(argv=None) -> int:

@@ -1,6 +1,6 @@
 """A build cache of part shapes, keyed by the part's parameters and the code that builds it.
 
-Each spec (a frozen dataclass of plain numbers, see :mod:`cad.parts` and :mod:`cad.vendor`) is turned
+Each spec (a frozen dataclass of plain numbers, see :mod:`cad.parts` and :mod:`cad.bought`) is turned
 into a fingerprint; the key hashes that fingerprint with the source of the module that defines the
 spec and of the shared geometry modules. A change of any value or of the builder's code gives a new
 key, so a stale shape is never reused. Shapes are stored as OpenCascade BREP files, written
@@ -27,7 +27,7 @@ from platform_tools.rig.frames import Pose
 log = logging.getLogger("cad.cache")
 REPO = Path(__file__).resolve().parents[1]
 #: modules every builder depends on: a change there invalidates every entry
-SHARED = ("cad.geom", "cad.parts.common", "cad.vendor.base", "cad.design")
+SHARED = ("cad.geom", "cad.parts.common", "cad.bought.base", "cad.layout.joints", "cad.layout.handles")
 
 
 def default_dir() -> Path:

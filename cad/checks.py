@@ -18,10 +18,10 @@ from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from platform_tools.rig.progress import progress
 
 from .assembly import PRINT_SETUPS, Assembly, Node
-from .design import fov_half_angles_deg
+from .layout import fov_half_angles_deg
 from .geom import Bounds, bounds_of, box
 from .parts.common import on_bed
-from .vendor.fasteners import Insert
+from cad.bought.fasteners import fastener_table
 
 CONTACT_MM3 = 0.01       # an overlap below this is a touch, not a clash
 TOL_REL, TOL_ABS = 0.05, 0.5
@@ -53,7 +53,7 @@ def intended_overlaps(asm: Assembly) -> dict[frozenset, tuple[float, str]]:
     """Overlaps the design means, by node pair: (expected volume mm^3, why)."""
     out: dict[frozenset, tuple[float, str]] = {}
     rig = asm.rig
-    ins = Insert.from_rig(rig, rig.desc.enclosure.insert, "M3")
+    ins = asm.layout.fits.insert
     for j in asm.layout.joints:
         screw = f"screw_{j.name}"
         d = j.diameter_mm
@@ -61,11 +61,11 @@ def intended_overlaps(asm: Assembly) -> dict[frozenset, tuple[float, str]]:
             out[frozenset((f"insert_{j.name}", j.host))] = (ins.melt_volume_mm3(), "heat-set insert melted into its hole")
             out[frozenset((screw, f"insert_{j.name}"))] = (0.0, "screw in its insert")
         elif j.kind == "tapped":
-            tap = 0.85 * d if j.host.startswith("heat_sink") else 0.0
+            tap = fastener_table().size(j.thread).tap_drill_mm if j.host.startswith("heat_sink") else 0.0
             out[frozenset((screw, j.host))] = (math.pi / 4 * (d * d - tap * tap) * j.engagement_mm,
                                                f"thread engaged {j.engagement_mm:.1f} mm in a tapped hole")
         else:
-            pilot = rig.part(j.screw_id).dims["pilot_hole_diameter_mm"].value
+            pilot = rig.dim(j.screw_id, "pilot_hole_diameter_mm")
             out[frozenset((screw, j.host))] = (math.pi / 4 * (d * d - pilot * pilot) * j.engagement_mm,
                                                "self-tapping thread cut into the plastic")
     return out
@@ -211,17 +211,17 @@ def camera_frusta(asm: Assembly) -> dict[str, tuple[cq.Shape, list[str]]]:
     """Each camera's frustum and the nodes that belong to that camera (excluded from its test)."""
     from .assembly import camera_frames
     lay = asm.layout
-    halves = fov_half_angles_deg(lay)
+    halves = fov_half_angles_deg(lay.rig)
     frames = camera_frames(asm)
     out = {}
     for name, T in frames.items():
         if name.startswith("zed"):
             hh, hv = halves["zed_x"]
-            near = lay.zed.front_mm + 0.05
+            near = lay.cameras.zed.front_mm + 0.05
             own = ["zed_x"]
         else:
             hh, hv = halves["thermal"]
-            near = lay.lens.front_mm + 0.05
+            near = lay.cameras.lens.front_mm + 0.05
             side = name.split("_")[1]
             own = [f"boson_{side}", f"boson_lens_{side}"]
             # a fisheye sees a cone: its diagonal half angle all round holds the whole image
@@ -250,7 +250,7 @@ def check_fov(asm: Assembly, extra: list[tuple[str, cq.Shape]] = ()) -> CheckRes
         details.append(f"{cam}: " + (", ".join(hits) if hits else "clear"))
         if hits:
             bad.append(f"{cam}'s field of view is obstructed by " + ", ".join(hits))
-    h = fov_half_angles_deg(asm.layout)
+    h = fov_half_angles_deg(asm.rig)
     return CheckResult("fields of view", not bad,
                        f"ZED X {2 * h['zed_x'][0]:.0f} x {2 * h['zed_x'][1]:.0f} deg and Boson {2 * h['thermal'][0]:.0f} deg "
                        f"(diagonal) frusta to {asm.layout.c.fov_length_mm:g} mm are clear" if not bad else "obstructed",
@@ -261,8 +261,8 @@ def check_battery(asm: Assembly, extra: list[tuple[str, cq.Shape]] = ()) -> Chec
     lay = asm.layout
     bat = asm.node("makita_battery")
     b = _bounds(asm, bat)
-    travel = lay.battery.size[0] + 5.0
-    d = np.asarray(lay.battery.slide_direction)
+    travel = lay.power.battery.size[0] + 5.0
+    d = np.asarray(lay.power.battery.slide_direction)
     lo = np.minimum(np.array(b.lo), np.array(b.lo) + d * travel)
     hi = np.maximum(np.array(b.hi), np.array(b.hi) + d * travel)
     sweep = box(Bounds(tuple(lo + 0.01), tuple(hi - 0.01)))
@@ -282,15 +282,15 @@ def check_battery(asm: Assembly, extra: list[tuple[str, cq.Shape]] = ()) -> Chec
 
 def check_vents(asm: Assembly) -> CheckResult:
     lay = asm.layout
-    shell = box(lay.outer).cut(box(lay.interior))
+    shell = box(lay.case.outer).cut(box(lay.case.interior))
     area = 0.0
-    for v in lay.vents:
+    for v in lay.case.vents:
         c = shell.intersect(box(v))
-        area += (c.Volume() if c.Solids() else 0.0) / lay.wall
-    fans = 2 * lay.fan_part.inlet_area_mm2
+        area += (c.Volume() if c.Solids() else 0.0) / lay.fits.wall
+    fans = 2 * lay.cooling.part.inlet_area_mm2
     ratio = lay.rig.desc.enclosure.vents.min_area_ratio
     ok = area >= fans * ratio
-    return CheckResult("vent area", ok, f"{len(lay.vents)} slots, {area:.0f} mm^2 open; fan inlets {fans:.0f} mm^2 x "
+    return CheckResult("vent area", ok, f"{len(lay.case.vents)} slots, {area:.0f} mm^2 open; fan inlets {fans:.0f} mm^2 x "
                        f"{ratio:g} = {fans * ratio:.0f} mm^2 needed", [] if ok else
                        ["enclosure.vents: add slots or make them longer"], dict(area_mm2=area, needed_mm2=fans * ratio))
 
@@ -318,10 +318,10 @@ def mass_properties(asm: Assembly) -> dict:
 def check_mass(asm: Assembly) -> CheckResult:
     mp = mass_properties(asm)
     com = np.array(mp["com_mm"])
-    g = asm.layout.handle_geometry()
+    g = asm.layout.handles.geometry
     details = [f"total {mp['mass_g'] / 1000:.2f} kg; centre of mass at x {com[0]:.1f}, y {com[1]:.1f}, z {com[2]:.1f} mm (rig frame)"]
     bad = []
-    for name, pose in asm.layout.handle_poses.items():
+    for name, pose in asm.layout.handles.poses.items():
         grip = pose.apply(np.array([0.0, 0.0, g.post_height + g.grip_d / 2]))
         axis = pose.rotate(np.array([1.0, 0, 0]))
         rel = com - grip

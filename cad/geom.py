@@ -120,6 +120,14 @@ def bounds_of(shape: cq.Shape, pose: Pose | None = None) -> Bounds:
     return Bounds((x0, y0, z0), (x1, y1, z1))
 
 
+def placed_bounds(local: Bounds, pose: Pose) -> Bounds:
+    """The axis-aligned box (rig frame, mm) around ``local`` (a box in a part's frame) placed at ``pose``."""
+    corners = np.array([[x, y, z] for x in (local.lo[0], local.hi[0]) for y in (local.lo[1], local.hi[1])
+                        for z in (local.lo[2], local.hi[2])])
+    p = pose.apply(corners)
+    return Bounds(tuple(p.min(axis=0)), tuple(p.max(axis=0)))
+
+
 def pose_xyz(x: float, y: float, z: float, rpy_deg: Vec3 = (0.0, 0.0, 0.0)) -> Pose:
     return Pose.from_xyz_rpy_deg((x, y, z), rpy_deg)
 

@@ -1,2 +1,2 @@
-"""Printed and machined parts. Each module turns the :class:`~cad.design.Layout` into a frozen spec
+"""Printed and machined parts. Each module turns the :class:`~cad.layout.Layout` into a frozen spec
 (plain numbers: its complete cache key) whose ``build()`` makes the solid, and says how it prints."""

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import cadquery as cq
 
-from ..design import Hole, Layout
+from ..layout import Hole, Layout
 from ..geom import Bounds, box, cut_all, fuse_all, one_solid
 from .common import PrintSetup, hole_tools
 
@@ -36,11 +36,11 @@ class ThermalMount:
 
 
 def zed_mount(lay: Layout) -> ZedMount:
-    return ZedMount("zed_mount", lay.zed_mount_shelf, lay.zed_mount_legs, lay.zed_mount_foot, lay.holes_for("zed_mount"))
+    return ZedMount("zed_mount", lay.mounts.zed_shelf, lay.mounts.zed_legs, lay.mounts.zed_foot, lay.holes_for("zed_mount"))
 
 
 def thermal_mount(lay: Layout) -> ThermalMount:
-    return ThermalMount("thermal_mount", lay.thermal_bar, lay.holes_for("thermal_mount"))
+    return ThermalMount("thermal_mount", lay.mounts.thermal_bar, lay.holes_for("thermal_mount"))
 
 
 PRINT = {

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import cadquery as cq
 import numpy as np
 
-from ..design import Hole, Layout, fov_half_angles_deg
+from ..layout import Hole, Layout, fov_half_angles_deg
 from ..geom import Bounds, box, cylinder, moved
 from .common import PrintSetup, hole_tools
 
@@ -113,24 +113,24 @@ class CaseHalf:
 
 def case_spec(lay: Layout) -> CaseSpec:
     c = lay.c
-    boxes = [lay.port_cutout] + list(lay.vents)
+    boxes = [lay.case.port_cutout] + list(lay.case.vents)
     # the ZED X window: a notch in the lid from the split plane to above the camera
-    z = lay.zed_box
-    r_in = max(lay.rig.desc.enclosure.corner_radius_mm - lay.wall, 0.0)   # past the inner corner fillet
-    boxes.append(Bounds((lay.outer.hi[0] - lay.wall - r_in - 1.0, z.lo[1] - lay.clear, lay.split_z - 0.01),
-                        (lay.outer.hi[0] + 1.0, z.hi[1] + lay.clear, z.hi[2] + lay.clear)))
-    half = fov_half_angles_deg(lay)["thermal"][0] + c.fov_margin_deg
+    z = lay.cameras.zed_box
+    r_in = max(lay.rig.desc.enclosure.corner_radius_mm - lay.fits.wall, 0.0)   # past the inner corner fillet
+    boxes.append(Bounds((lay.case.outer.hi[0] - lay.fits.wall - r_in - 1.0, z.lo[1] - lay.fits.clear, lay.case.split_z - 0.01),
+                        (lay.case.outer.hi[0] + 1.0, z.hi[1] + lay.fits.clear, z.hi[2] + lay.fits.clear)))
+    half = fov_half_angles_deg(lay.rig)["thermal"][0] + c.fov_margin_deg
     cones = []
-    for t in lay.thermal.values():
+    for t in lay.cameras.thermal.values():
         apex = tuple(t.pose.t)
         axis = tuple(t.pose.rotate(np.array([1.0, 0, 0])))
-        length = (lay.outer.hi[0] - apex[0]) / max(axis[0], 1e-6) + 1.0
-        cones.append(ConeCut(apex, axis, half, length, lay.lens.diameter_mm + 2 * lay.clear))
-    panel = tuple((part, tuple(map(tuple, pose.matrix()))) for part, pose in lay.panel_parts.values())
+        length = (lay.case.outer.hi[0] - apex[0]) / max(axis[0], 1e-6) + 1.0
+        cones.append(ConeCut(apex, axis, half, length, lay.cameras.lens.diameter_mm + 2 * lay.fits.clear))
+    panel = tuple((part, tuple(map(tuple, pose.matrix()))) for part, pose in lay.controls.values())
     holes = lay.holes_for("case_lower") + lay.holes_for("case_lid")
-    return CaseSpec(lay.outer, lay.wall, lay.rig.desc.enclosure.corner_radius_mm, lay.split_z, c.lug_width_mm,
-                    c.lug_protrusion_mm, lay.insert.hole_depth_mm + lay.min_wall, c.lid_lug_mm, tuple(lay.lugs),
-                    tuple(lay.pads), tuple(boxes), tuple(cones), panel, holes)
+    return CaseSpec(lay.case.outer, lay.fits.wall, lay.rig.desc.enclosure.corner_radius_mm, lay.case.split_z, c.lug_width_mm,
+                    c.lug_protrusion_mm, lay.fits.insert_plate_mm, c.lid_lug_mm, tuple(lay.case.lugs),
+                    tuple(lay.handles.pads), tuple(boxes), tuple(cones), panel, holes)
 
 
 PRINT = {

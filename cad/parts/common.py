@@ -8,7 +8,7 @@ import numpy as np
 
 from platform_tools.rig.frames import Pose
 
-from ..design import Hole
+from ..layout import Hole
 from ..geom import cylinder
 
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import cadquery as cq
 
-from ..design import Hole, Layout
+from ..layout import Hole, Layout
 from ..geom import Bounds, box, cut_all, fuse_all, one_solid
 from .common import PrintSetup, hole_tools
 
@@ -50,11 +50,11 @@ class HeatSink:
 
 def heat_sink(lay: Layout) -> HeatSink:
     hs = lay.rig.desc.enclosure.heat_sink
-    t = lay.thermal["left"]
+    t = lay.cameras.thermal["left"]
     # the tapped holes are the same in both cameras' frames (the design is symmetric)
     holes = tuple(Hole("heat_sink", tuple(t.pose.inverse().apply(h.origin)), tuple(t.pose.inverse().rotate(h.direction)),
                        h.diameter, h.depth) for h in lay.holes_for("heat_sink_left"))
-    return HeatSink("heat_sink", lay.core.bounds(), hs.wall_mm, hs.fin_count, hs.fin_thickness_mm, hs.fin_height_mm,
+    return HeatSink("heat_sink", lay.cameras.core.bounds(), hs.wall_mm, hs.fin_count, hs.fin_thickness_mm, hs.fin_height_mm,
                     lay.c.heat_sink_base_mm, holes)
 
 
@@ -93,8 +93,8 @@ class FanMount:
 
 
 def fan_mount(lay: Layout, side: str) -> FanMount:
-    t = lay.thermal[side]
-    return FanMount(f"fan_mount_{side}", t.fan_plate, t.fan_boss, t.duct_in, t.duct_out, lay.c.duct_wall_mm,
+    f, p = lay.cooling.fans[side], lay.cooling.plates[side]
+    return FanMount(f"fan_mount_{side}", p.plate, p.boss, f.duct_in, f.duct_out, lay.c.duct_wall_mm,
                     lay.holes_for(f"fan_mount_{side}"))
 
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import cadquery as cq
 
-from ..design import HandleGeometry, Layout
+from ..layout import HandleGeometry, Layout
 from ..geom import Bounds, box, cut_all, cylinder, fuse_all, one_solid
 from .common import PrintSetup
 
@@ -38,7 +38,7 @@ class Handle:
 
 
 def handle(lay: Layout) -> Handle:
-    return Handle("handle", lay.handle_geometry(), lay.screw_hole_mm("M3"))
+    return Handle("handle", lay.handles.geometry, lay.fits.screw_hole_mm("M3"))
 
 
 PRINT = {"handle": PrintSetup((90.0, 0.0, 0.0), "on its side: flat faces top and bottom, octagon grip, no support")}

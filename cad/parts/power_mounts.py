@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import cadquery as cq
 
-from ..design import Hole, Layout
+from ..layout import Hole, Layout
 from ..geom import Bounds, box, cut_all, cylinder, one_solid
 from .common import PrintSetup, hole_tools
 
@@ -34,11 +34,11 @@ class BatteryMount:
 
 
 def standoff(lay: Layout) -> Standoff:
-    return Standoff("orin_standoff", lay.c.orin_standoff_diameter_mm, lay.standoff_h, lay.screw_hole_mm("M3"))
+    return Standoff("orin_standoff", lay.c.orin_standoff_diameter_mm, lay.compute.standoff_h, lay.fits.screw_hole_mm("M3"))
 
 
 def battery_mount(lay: Layout) -> BatteryMount:
-    return BatteryMount("battery_mount", lay.battery_mount, lay.holes_for("battery_mount"))
+    return BatteryMount("battery_mount", lay.power.battery_mount, lay.holes_for("battery_mount"))
 
 
 PRINT = {

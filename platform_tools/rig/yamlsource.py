@@ -8,11 +8,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, Generic, Iterable, TypeVar
 
 import yaml
 
-from .typed import KeyPath, format_path
+from .typed import KeyPath, Problem, convert, format_path
+
+T = TypeVar("T")
 
 
 class YamlSourceError(Exception):
@@ -110,3 +112,35 @@ def load_yaml_file(path: Path | str) -> YamlSource:
     except UnicodeDecodeError as exc:
         raise YamlSourceError(f"{path}: not UTF-8 text (byte {exc.start}); expected a YAML file") from None
     return load_yaml_text(text, path)
+
+
+@dataclass
+class Typed(Generic[T]):
+    """A typed value read from a YAML file, and the file (for locating later problems in it)."""
+    value: T
+    source: YamlSource
+
+
+def load_typed(path: Path | str, tp: type[T], error: Callable[[list[str]], Exception], *,
+               prepare: Callable[[dict], dict] | None = None, prepare_errors: tuple[type[Exception], ...] = (),
+               rules: Callable[[T], Iterable[Problem]] | None = None,
+               locate: Callable[[Problem, YamlSource], str] | None = None) -> Typed[T]:
+    """Read ``path`` strictly, check it holds a mapping, let ``prepare`` change the data (the rig's
+    ``--set`` overrides; its ``prepare_errors`` are bad input too), convert it to ``tp`` and run
+    ``rules`` on the value. Any problem raises ``error(lines)``, one line per problem naming the file
+    and line (``locate`` may name something else, such as the ``--set`` that caused it)."""
+    path = Path(path)
+    try:
+        source = load_yaml_file(path)
+        if not isinstance(source.data, dict):
+            raise YamlSourceError(f"{path}: expected a YAML mapping at the top level, got {type(source.data).__name__}")
+        data = prepare(source.data) if prepare is not None else source.data
+    except (YamlSourceError, *prepare_errors) as exc:
+        raise error([str(exc)]) from None
+    where = locate or (lambda problem, src: f"{src.where(problem.path)}: {problem}")
+    value, problems = convert(tp, data)
+    if not problems and rules is not None:
+        problems = list(rules(value))
+    if problems:
+        raise error([where(p, source) for p in problems])
+    return Typed(value, source)

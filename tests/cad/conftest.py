@@ -1,12 +1,5 @@
 import pytest
 
-from platform_tools.rig import load_rig
-
-
-@pytest.fixture(scope="session")
-def rig():
-    return load_rig()
-
 
 @pytest.fixture(scope="session")
 def asm(rig):

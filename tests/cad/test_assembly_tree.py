@@ -1,6 +1,6 @@
 """What the BOM reads: part ids, quantities, placements, fasteners from the geometry."""
 from cad.assembly import assembly_tree
-from cad.vendor.fasteners import STOCK_LENGTHS_MM
+from cad.bought.fasteners import fastener_table
 
 
 def test_every_joint_places_its_fasteners(asm):
@@ -9,7 +9,7 @@ def test_every_joint_places_its_fasteners(asm):
     inserts = asm.by_part("m3_insert")
     assert len(screws) == len(joints)
     assert len(inserts) == sum(j.kind == "insert" for j in joints)
-    assert all(n.props["length_mm"] in STOCK_LENGTHS_MM for n in screws)
+    assert all(n.props["length_mm"] in fastener_table().stock_lengths_mm for n in screws)
 
 
 def test_tree_counts_and_placements(asm):

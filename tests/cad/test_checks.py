@@ -52,7 +52,7 @@ def test_an_insert_in_the_wrong_place_fails_its_allowance(asm):
 
 def test_fov_obstruction_is_named(asm):
     lay = asm.layout
-    obstacle = box(Bounds((lay.outer.hi[0] + 40, -20, -10), (lay.outer.hi[0] + 45, 20, 10)))
+    obstacle = box(Bounds((lay.case.outer.hi[0] + 40, -20, -10), (lay.case.outer.hi[0] + 45, 20, 10)))
     r = checks.check_fov(asm, extra=[("obstacle", obstacle)])
     assert not r.ok
     assert any("zed_x_left_optical" in d and "obstacle" in d for d in r.details)
@@ -81,7 +81,7 @@ def test_vent_area_is_measured_on_the_walls(asm, results):
     v = lay.rig.desc.enclosure.vents
     assert r.data["area_mm2"] >= r.data["needed_mm2"]
     # each slot is slot_width x length through the wall, no more
-    assert r.data["area_mm2"] <= len(lay.vents) * v.slot_width_mm * v.slot_length_mm + 1e-6
+    assert r.data["area_mm2"] <= len(lay.case.vents) * v.slot_width_mm * v.slot_length_mm + 1e-6
 
 
 def test_mass_counts_every_part(asm, rig):

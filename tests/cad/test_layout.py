@@ -6,7 +6,7 @@ from OCP.gp import gp_Pnt
 from OCP.TopAbs import TopAbs_IN
 
 from cad.assembly import build, camera_frames
-from cad.design import design_problems, layout
+from cad.layout import design_problems, layout
 from cad.geom import bounds_of
 from platform_tools.rig import load_rig
 
@@ -24,7 +24,7 @@ def test_camera_frames_are_the_rigs(rig, asm):
 
 
 def test_case_holds_every_internal_part(asm):
-    inner = asm.layout.interior
+    inner = asm.layout.case.interior
     for name in ("jetson_agx_orin", "zed_link_quad", "heat_sink_left", "fan_right", "dc_converter", "thermal_mount"):
         b = bounds_of(asm.node(name).shape(asm.cache))
         assert all(lo >= ilo - 1e-6 for lo, ilo in zip(b.lo, inner.lo)), name
@@ -34,12 +34,12 @@ def test_case_holds_every_internal_part(asm):
 def test_zed_front_is_flush_with_the_case_and_split_is_under_it(asm):
     lay = asm.layout
     zb = bounds_of(asm.node("zed_x").shape(asm.cache))
-    assert zb.hi[0] == pytest.approx(lay.outer.hi[0], abs=1e-6)
-    assert lay.split_z == pytest.approx(zb.lo[2] - lay.clear)
+    assert zb.hi[0] == pytest.approx(lay.case.outer.hi[0], abs=1e-6)
+    assert lay.case.split_z == pytest.approx(zb.lo[2] - lay.fits.clear)
     lower = bounds_of(asm.node("case_lower").shape(asm.cache))
     lid = bounds_of(asm.node("case_lid").shape(asm.cache))
-    assert lower.hi[2] == pytest.approx(lay.split_z, abs=1e-6)
-    assert lid.lo[2] == pytest.approx(lay.split_z, abs=1e-6)
+    assert lower.hi[2] == pytest.approx(lay.case.split_z, abs=1e-6)
+    assert lid.lo[2] == pytest.approx(lay.case.split_z, abs=1e-6)
 
 
 def test_heat_sink_volume_matches_its_drawing(rig, asm):
@@ -67,7 +67,7 @@ def test_moving_the_thermal_pair_moves_its_mount_window_and_frame(rig, asm):
     assert camera_frames(asm2)["thermal_left_optical"].t[2] == pytest.approx(-52.0)
     # the window in the front wall follows the camera: open on the new axis, solid where the old edge was
     lay2 = asm2.layout
-    x_wall = lay2.outer.hi[0] - lay2.wall / 2
+    x_wall = lay2.case.outer.hi[0] - lay2.fits.wall / 2
     y = rig.desc.sensors.thermal.baseline_mm / 2
     lower2 = asm2.node("case_lower").shape(asm2.cache)
     assert not inside(lower2, (x_wall, y, -52.0))

@@ -11,12 +11,12 @@ import cadquery as cq
 
 from platform_tools.rig import Rig
 
-from ..geom import Bounds
-from .base import VendorPart, envelope, part_colour
+from cad.geom import Bounds
+from cad.bought.base import BoughtPart, envelope, part_colour
 
 
 @dataclass(frozen=True)
-class MakitaBattery(VendorPart):
+class MakitaBattery(BoughtPart):
     slide_direction: tuple[float, float, float] = (-1.0, 0.0, 0.0)
 
     @classmethod

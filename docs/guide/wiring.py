@@ -10,8 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from html import escape
 
-#: Boson external-sync input: a 3-12 V pulse (shared/reference/boson-protocol.md: public notes, verify)
-BOSON_SYNC_INPUT_V = (3.0, 12.0)
+from cad.bought.base import part_of_kind
+
 #: Jetson 40-pin header (NVIDIA AGX Orin devkit pinout, same layout as a Raspberry Pi header)
 HEADER_5V_PIN, HEADER_GND_PIN = 2, 6
 
@@ -59,12 +59,15 @@ def wiring(rig) -> tuple[list[Block], list[Wire], list[Check]]:
     d = rig.desc
     P = rig.part
     s, b = d.sync, d.recording.button
-    bat, conv, orin, fan = P("makita_bl1840b"), P("dc_converter"), P("jetson_agx_orin"), P("fan_3010_5v")
-    src = P(s.source_part)
+    def K(kind: str):   # the rig's part of that kind
+        return P(part_of_kind(rig, kind))
+
+    bat, conv, orin, fan = K("battery"), K("converter"), K("computer"), K("fan")
+    src, boson = P(s.source_part), P(d.sensors.thermal.part)
     blocks = [
         Block("battery", 30, 40, 230, 70, bat.vendor + " " + bat.part_number, [f"out {_v(bat.output_v)}"]),
-        Block("fuse", 30, 160, 230, 60, "fuse", [P("blade_fuse").part_number]),
-        Block("switch", 30, 270, 230, 60, "power switch", [P("power_switch").part_number.split(" (")[0]]),
+        Block("fuse", 30, 160, 230, 60, "fuse", [K("fuse").part_number]),
+        Block("switch", 30, 270, 230, 60, "power switch", [K("switch").part_number.split(" (")[0]]),
         Block("converter", 30, 380, 230, 70, "DC-DC converter", [f"in {_v(conv.supply_v)}, out {_v(conv.output_v)}"]),
         Block("card", 370, 40, 300, 90, f"{src.part_number} (capture card)",
               ["GMSL2 camera ports", f"{s.connector}: trigger out, pin {s.signal_pin} signal, pin {s.ground_pin} GND"]),
@@ -78,7 +81,7 @@ def wiring(rig) -> tuple[list[Block], list[Wire], list[Check]]:
         Block("boson_left", 790, 170, 230, 70, "Boson 640 left", ["USB-C, external sync in"]),
         Block("boson_right", 790, 290, 230, 70, "Boson 640 right", ["USB-C, external sync in"]),
         Block("fans", 790, 410, 230, 70, f"2 x {fan.part_number}", [f"{_v(fan.supply_v)}"]),
-        Block("button", 370, 560, 300, 70, "record button with LED", [P("record_button").part_number]),
+        Block("button", 370, 560, 300, 70, "record button with LED", [K("button").part_number]),
         Block("wifi", 30, 540, 230, 60, "2 x Wi-Fi antenna", ["RP-SMA bulkheads, u.fl pigtails"]),
         Block("ssd", 30, 640, 230, 50, "NVMe SSD", ["recordings (" + d.recording.data_mount + ")"]),
     ]
@@ -104,10 +107,7 @@ def wiring(rig) -> tuple[list[Block], list[Wire], list[Check]]:
         Wire("data", "wifi", "orin", "u.fl", [(260, 570), (340, 570), (340, 470), (370, 470)]),
         Wire("data", "ssd", "orin", "M.2", [(260, 665), (350, 665), (350, 480), (370, 480)]),
     ]
-    lo, hi = BOSON_SYNC_INPUT_V
-    checks = [
-        Check(lo <= s.level_v <= hi, f"sync level {s.level_v:g} V (sync.level_v) within the Boson's external-sync "
-                                     f"input range {lo:g}-{hi:g} V"),
+    checks = [_sync_level_check(s, d.sensors.thermal.part, boson),
         Check(bat.output_v.max <= conv.supply_v.max and bat.output_v.min >= conv.supply_v.min,
               f"battery {_v(bat.output_v)} within the converter's input {_v(conv.supply_v)}"),
         Check(orin.supply_v.min <= conv.output_v.min and conv.output_v.max <= orin.supply_v.max,
@@ -117,6 +117,17 @@ def wiring(rig) -> tuple[list[Block], list[Wire], list[Check]]:
               f"header pins distinct: button {b.gpio_pin}, LED {b.led_pin}, fan 5 V {HEADER_5V_PIN}, GND {HEADER_GND_PIN}"),
     ]
     return blocks, wires, checks
+
+
+def _sync_level_check(s, boson_id: str, boson) -> Check:
+    """The trigger level against the Boson's external-sync input range (parts.<boson>.sync_input_v)."""
+    r = boson.sync_input_v
+    if r is None:
+        return Check(False, f"sync level {s.level_v:g} V (sync.level_v): parts.{boson_id}.sync_input_v is not "
+                            "given, so it cannot be checked against the Boson's external-sync input")
+    lo, hi = r.min.value, r.max.value
+    return Check(lo <= s.level_v <= hi, f"sync level {s.level_v:g} V (sync.level_v) within the Boson's external-sync "
+                                        f"input range {lo:g}-{hi:g} V")
 
 
 def _fit(text: str, width: float, px_per_char: float = 6.3) -> str:

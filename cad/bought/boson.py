@@ -15,12 +15,12 @@ import cadquery as cq
 from platform_tools.rig.frames import T_BODY_OPTICAL, Pose
 from platform_tools.rig import Rig
 
-from ..geom import Bounds, cylinder
-from .base import VendorPart, envelope, part_colour
+from cad.geom import Bounds, cylinder
+from cad.bought.base import BoughtPart, envelope, part_colour
 
 
 @dataclass(frozen=True)
-class BosonCore(VendorPart):
+class BosonCore(BoughtPart):
     """The core body; its frame is the camera's (optical centre), so it needs the lens length."""
     lens_length_mm: float = 0.0
     lens_front_mm: float = 0.0
@@ -51,7 +51,7 @@ class BosonCore(VendorPart):
 
 
 @dataclass(frozen=True)
-class BosonLens(VendorPart):
+class BosonLens(BoughtPart):
     """The lens barrel, from the core's front face to the lens front."""
     front_mm: float = 0.0
 

@@ -12,14 +12,14 @@ import cadquery as cq
 
 from platform_tools.rig import Rig
 
-from ..geom import Bounds, cylinder
-from .base import VendorPart, envelope, part_colour
+from cad.geom import Bounds, cylinder
+from cad.bought.base import BoughtPart, envelope, part_colour
 
 BEZEL_MM = 2.0   # bezel thickness in front of the panel (drawn only; its outline is the envelope's)
 
 
 @dataclass(frozen=True)
-class PanelPart(VendorPart):
+class PanelPart(BoughtPart):
     panel_mm: float = 2.0
     round_cutout: bool = True
     cutout_mm: tuple[float, float] = (0.0, 0.0)      # (width along y, height along z) or (d, d)

@@ -13,12 +13,12 @@ import cadquery as cq
 
 from platform_tools.rig import Rig
 
-from ..geom import Bounds, cylinder
-from .base import VendorPart, envelope, part_colour
+from cad.geom import Bounds, cylinder
+from cad.bought.base import BoughtPart, envelope, part_colour
 
 
 @dataclass(frozen=True)
-class BlowerFan(VendorPart):
+class BlowerFan(BoughtPart):
     outlet_width_mm: float = 0.0
     outlet_height_mm: float = 0.0
     inlet_diameter_mm: float = 0.0

@@ -14,12 +14,12 @@ import cadquery as cq
 from platform_tools.rig.frames import T_BODY_OPTICAL, Pose
 from platform_tools.rig import Rig
 
-from ..geom import Bounds, cylinder
-from .base import VendorPart, envelope, part_colour
+from cad.geom import Bounds, cylinder
+from cad.bought.base import BoughtPart, envelope, part_colour
 
 
 @dataclass(frozen=True)
-class ZedX(VendorPart):
+class ZedX(BoughtPart):
     baseline_mm: float = 0.0
     front_mm: float = 0.0                 # front face, ahead of the optical centres
     lens_window_mm: float = 0.0

@@ -9,12 +9,12 @@ from dataclasses import dataclass
 
 from platform_tools.rig import Rig
 
-from ..geom import Bounds
-from .base import VendorPart, envelope, part_colour
+from cad.geom import Bounds
+from cad.bought.base import BoughtPart, envelope, part_colour
 
 
 @dataclass(frozen=True)
-class BoxPart(VendorPart):
+class BoxPart(BoughtPart):
     mount_uv_mm: tuple[tuple[float, float], ...] = ()
     mount_depth_mm: float = 0.0
 

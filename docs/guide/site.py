@@ -3,17 +3,19 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from . import pictures, wiring
-from .bom import Bom
-from .guide import Guide, note_context
-from .render import TEMPLATES, common_context, environment, write_bom
+from bom.bom import Bom
+from bom.render import common_context, environment, write_bom
+from docs.guide import pictures, wiring
+from docs.guide.steps import Guide, note_context
+
+TEMPLATES = Path(__file__).resolve().parent / "templates"
 
 NAV = [("index.html", "Overview"), ("assembly.html", "Assembly guide"), ("bom.html", "Bill of materials"),
        ("wiring.html", "Wiring"), ("printing.html", "Printing")]
 
 
 def write_site(asm, bom: Bom, guide: Guide, stage: Path) -> list[Path]:
-    env = environment()
+    env = environment(TEMPLATES)
     rig = asm.rig
     site = dict(nav=NAV)
     files = write_bom(bom, stage, command="docs", site=site, env=env)

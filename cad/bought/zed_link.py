@@ -9,12 +9,12 @@ from dataclasses import dataclass
 
 from platform_tools.rig import Rig
 
-from ..geom import Bounds
-from .base import VendorPart, envelope, part_colour
+from cad.geom import Bounds
+from cad.bought.base import BoughtPart, envelope, part_colour
 
 
 @dataclass(frozen=True)
-class ZedLinkQuad(VendorPart):
+class ZedLinkQuad(BoughtPart):
     @classmethod
     def from_rig(cls, rig: Rig, part_id: str) -> "ZedLinkQuad":
         return cls(part_id, envelope(rig, part_id), part_colour("card"))

@@ -12,12 +12,12 @@ import cadquery as cq
 
 from platform_tools.rig import Rig
 
-from ..geom import Bounds
-from .base import VendorPart, envelope, part_colour
+from cad.geom import Bounds
+from cad.bought.base import BoughtPart, envelope, part_colour
 
 
 @dataclass(frozen=True)
-class MakitaAdapter(VendorPart):
+class MakitaAdapter(BoughtPart):
     t_slot_width_mm: float = 0.0
     t_slot_depth_mm: float = 0.0
     rail_engagement_mm: float = 0.0

@@ -20,11 +20,11 @@ import jinja2
 
 from platform_tools.rig.typed import Gt, closest, convert
 from platform_tools.rig.problems import InputProblems
-from platform_tools.rig.yamlsource import YamlSourceError, load_yaml_file
+from platform_tools.rig.yamlsource import load_typed
 
-from .bom import Bom, Line
+from bom.bom import Bom, Line
 
-DEFAULT_STEPS = Path(__file__).resolve().parents[1] / "docs" / "assembly" / "steps.yaml"
+DEFAULT_STEPS = Path(__file__).resolve().parents[1] / "assembly" / "steps.yaml"
 
 
 class GuideError(InputProblems):
@@ -95,15 +95,8 @@ def note_context(rig) -> dict:
 
 def load_guide(asm, bom: Bom, path: Path | str | None = None) -> Guide:
     path = Path(path) if path is not None else DEFAULT_STEPS
-    try:
-        src = load_yaml_file(path)
-    except YamlSourceError as exc:
-        raise GuideError([str(exc)]) from None
-    if not isinstance(src.data, dict):
-        raise GuideError([f"{path}: expected a YAML mapping at the top level"])
-    spec, problems = convert(GuideSpec, src.data)
-    if problems:
-        raise GuideError([f"{src.where(p.path)}: {p}" for p in problems])
+    typed = load_typed(path, GuideSpec, GuideError)
+    spec, src = typed.value, typed.source
     out: list[str] = []
 
     def bad(key: tuple, message: str) -> None:

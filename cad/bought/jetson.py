@@ -10,12 +10,12 @@ from dataclasses import dataclass
 
 from platform_tools.rig import Rig
 
-from ..geom import Bounds
-from .base import VendorPart, envelope, part_colour
+from cad.geom import Bounds
+from cad.bought.base import BoughtPart, envelope, part_colour
 
 
 @dataclass(frozen=True)
-class JetsonOrin(VendorPart):
+class JetsonOrin(BoughtPart):
     port_panel_height_mm: float = 0.0
     mount_uv_mm: tuple[tuple[float, float], ...] = ()
     mount_depth_mm: float = 0.0

@@ -2,7 +2,7 @@
 from the rig description with its source and confidence), a colour, and a builder of its shape in its
 own frame. Subclasses add their mounting features and, for cameras, their optical frames.
 
-A vendor part is a frozen dataclass of plain numbers, so its ``repr`` is a complete cache key.
+A bought part is a frozen dataclass of plain numbers, so its ``repr`` is a complete cache key.
 """
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import cadquery as cq
 from platform_tools.rig import Rig
 from platform_tools.rig.schema import Sourced
 
-from ..geom import Bounds, Vec3
+from cad.geom import Bounds, Vec3
 
 Colour = tuple[float, float, float, float]
 
@@ -25,6 +25,15 @@ class Provenance:
     value: float
     source: str
     confidence: str
+
+
+def part_of_kind(rig: Rig, kind: str) -> str:
+    """The id of the rig's (first) part of ``kind`` ("fan", "computer", ...): where a part's id is
+    written once, in config/rig.yaml."""
+    for pid, part in rig.desc.parts.items():
+        if part.kind.value == kind:
+            return pid
+    raise KeyError(f"the rig has no part of kind {kind}")
 
 
 def envelope(rig: Rig, part_id: str) -> Vec3:
@@ -42,7 +51,7 @@ def provenance(rig: Rig, part_id: str) -> list[Provenance]:
 
 
 @dataclass(frozen=True)
-class VendorPart:
+class BoughtPart:
     """A bought part as an envelope box centred on its own origin (subclasses move and detail it)."""
     part_id: str
     size: Vec3

@@ -1,0 +1,168 @@
+"""What makes the design impossible, found before any geometry is built: the rig loader cannot know
+that a camera runs into another or that a handle does not fit the case. Every problem names the rig
+key (or design constant) to change, so an impossible value never reaches OpenCascade."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from platform_tools.rig import Rig
+
+from .case import lug_bounds
+from .constants import PAD_MARGIN_MM, C, Constants
+from .rig_layout import Layout, build_layout
+
+#: the least post a handle needs between its foot and its grip
+MIN_POST_MM = 2.0
+
+
+@dataclass(frozen=True)
+class DesignProblem:
+    key: str       # the rig key (or design constant) to change
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.key}: {self.message}"
+
+
+class DesignError(Exception):
+    def __init__(self, problems: list[DesignProblem]):
+        self.problems = problems
+        super().__init__("\n".join(str(p) for p in problems))
+
+
+def design_problems(rig: Rig, c: Constants = C) -> list[DesignProblem]:
+    """What makes the design impossible: first the rig values alone, then the layout made from them."""
+    problems = list(input_problems(rig))
+    if problems:
+        return problems
+    try:
+        lay = build_layout(rig, c)
+    except ValueError as exc:  # a stock screw or a box that cannot be made from these values
+        return [DesignProblem("enclosure", f"the layout cannot be made from these values: {exc}")]
+    return list(layout_problems(lay))
+
+
+def input_problems(rig: Rig):
+    """Rig values that cannot make a layout at all."""
+    d = rig.desc
+    e = d.enclosure
+    p = d.printing.printer
+    min_wall = p.nozzle_mm * p.min_wall_nozzles
+    if e.heat_sink.fin_count > 1:
+        hs = e.heat_sink
+        height = rig.part(d.sensors.thermal.part).envelope_mm.z.value + 2 * hs.wall_mm
+        gap = (height - hs.fin_count * hs.fin_thickness_mm) / (hs.fin_count - 1)
+        if gap < hs.fin_thickness_mm:
+            yield DesignProblem("enclosure.heat_sink.fin_count",
+                                f"{hs.fin_count} fins of {hs.fin_thickness_mm:g} mm on a {height:g} mm tall heat sink "
+                                f"leave {gap:.2f} mm between fins; expected at least {hs.fin_thickness_mm:g} mm")
+    if e.vents.slot_width_mm < min_wall:
+        yield DesignProblem("enclosure.vents.slot_width_mm", f"{e.vents.slot_width_mm:g} mm is narrower than a wall")
+    if e.corner_radius_mm >= e.handles.grip_diameter_mm:
+        yield DesignProblem("enclosure.corner_radius_mm", "is larger than the handle grip; expected a few mm")
+    zed = d.sensors.zed_x.part
+    zw = rig.part(zed).envelope_mm.y.value
+    zb = rig.dim(zed, "baseline_mm")
+    win = rig.dim(zed, "lens_window_diameter_mm")
+    if zb + win > zw:
+        yield DesignProblem(f"parts.{zed}.dims.baseline_mm",
+                            f"{zb:g} mm baseline with {win:g} mm lens windows does not fit a {zw:g} mm wide camera "
+                            f"(expected baseline <= {zw - win:g} mm)")
+
+
+def layout_problems(lay: Layout):
+    """A layout that can be computed but not built: parts in each other, handles that do not fit,
+    a case too big for the printer, too little vent area."""
+    yield from _camera_problems(lay)
+    yield from _handle_problems(lay)
+    yield from _print_and_vent_problems(lay)
+
+
+def _camera_problems(lay: Layout):
+    rig, cams, mounts, fits, case = lay.rig, lay.cameras, lay.mounts, lay.fits, lay.case
+    t = rig.desc.sensors.thermal
+    gap = rig.desc.enclosure.heat_sink_gap_mm
+    # the thermal pair must sit below the ZED X with room for its heat sinks and the ZED shelf
+    hs_top = max(s.heat_sink.hi[2] for s in cams.thermal.values())
+    shelf = mounts.zed_shelf
+    if hs_top > shelf.lo[2] - gap:
+        yield DesignProblem("sensors.thermal.pose.xyz_mm",
+                            f"the Boson heat sinks reach z = {hs_top:.1f} mm, into the ZED X and its mount (shelf "
+                            f"underside at {shelf.lo[2]:.1f} mm); move the pair down by at least "
+                            f"{hs_top - shelf.lo[2] + gap:.1f} mm")
+    inner_edge = min(abs(s.heat_sink.lo[1]) if s.sign > 0 else abs(s.heat_sink.hi[1]) for s in cams.thermal.values())
+    legs = mounts.zed_legs
+    leg_edge = max(abs(b.lo[1]) for b in legs) if legs else 0
+    if any(legs[0].overlaps(s.heat_sink) or legs[1].overlaps(s.heat_sink) for s in cams.thermal.values()):
+        yield DesignProblem("sensors.thermal.baseline_mm",
+                            f"{t.baseline_mm:g} mm leaves the inner heat sink faces at |y| = {inner_edge:.1f} mm, "
+                            f"inside the ZED X mount legs (|y| <= {leg_edge:.1f} mm)")
+    front_in = case.outer.hi[0] - fits.wall
+    for s in cams.thermal.values():
+        lens_front = s.pose.t[0] + cams.lens.front_mm
+        if lens_front > front_in + 1e-6:
+            yield DesignProblem("sensors.thermal.pose.xyz_mm",
+                                f"the {s.side} Boson lens front (x = {lens_front:.1f} mm) is ahead of the front wall's "
+                                f"inner face (x = {front_in:.1f} mm, set by the ZED X front); "
+                                f"move the pair back")
+        if s.heat_sink.hi[0] + fits.gap > front_in:
+            yield DesignProblem("sensors.thermal.pose.xyz_mm", f"the {s.side} heat sink is within the gap of the front wall")
+    need = fits.insert.outer_diameter_mm + 2 * (fits.min_wall + fits.gap)   # the bar's floor screws sit between
+    if 2 * inner_edge < need:
+        yield DesignProblem("sensors.thermal.baseline_mm",
+                            f"{t.baseline_mm:g} mm leaves {2 * inner_edge:.1f} mm between the two heat sinks; the thermal "
+                            f"bar's floor screw inserts need {need:.1f} mm there (expected baseline >= "
+                            f"{t.baseline_mm + need - 2 * inner_edge:.1f} mm)")
+    if mounts.zed_foot.overlaps(mounts.thermal_bar):
+        yield DesignProblem("sensors.thermal.pose.xyz_mm", "the ZED X mount's foot runs into the thermal bar")
+
+
+def _handle_problems(lay: Layout):
+    rig, case = lay.rig, lay.case
+    h = rig.desc.enclosure.handles
+    r = rig.desc.enclosure.corner_radius_mm
+    g = lay.handles.geometry
+    length = case.outer.size[0]
+    foot_len = g.grip_length + 2 * g.flange + 2 * PAD_MARGIN_MM    # both feet with their pads
+    if h.top or h.sides:
+        if foot_len > length - 2 * r:
+            yield DesignProblem("enclosure.handles.grip_length_mm",
+                                f"{h.grip_length_mm:g} mm grips with their feet ({foot_len:g} mm) do not fit the "
+                                f"{length:.1f} mm long case; expected <= "
+                                f"{length - 2 * r - 2 * g.flange - 2 * PAD_MARGIN_MM:.1f} mm")
+        if g.post_height < g.foot + MIN_POST_MM:
+            yield DesignProblem("enclosure.handles.clearance_mm",
+                                f"{h.clearance_mm:g} mm leaves no post between the foot and the grip; expected >= "
+                                f"{g.foot + MIN_POST_MM + lay.handles.pad_mm:g} mm")
+    pad_h = h.grip_diameter_mm + 2 * PAD_MARGIN_MM    # a side handle's pad, up the lid's wall
+    if h.sides and pad_h > case.outer.hi[2] - case.split_z - 2 * lay.fits.wall:
+        yield DesignProblem("enclosure.handles.grip_diameter_mm",
+                            f"side handle feet ({pad_h:g} mm tall) do not fit the lid's "
+                            f"{case.outer.hi[2] - case.split_z:.1f} mm side walls")
+    for pad in lay.handles.pads:
+        for x, s in case.lugs:
+            if pad.overlaps(lug_bounds(case, lay.c, lay.fits, x, s)):
+                yield DesignProblem("enclosure.handles.grip_length_mm",
+                                    f"a handle foot pad at x = {pad.centre[0]:.1f} mm runs into a case lug at "
+                                    f"x = {x:.1f} mm; shorten the grip")
+                break
+
+
+def _print_and_vent_problems(lay: Layout):
+    rig, o, p = lay.rig, lay.case.outer, lay.c.lug_protrusion_mm
+    # every printed part fits the bed (the case halves, with their lugs, are the largest)
+    bed = rig.desc.printing.printer.bed_mm
+    footprint = sorted([o.size[0], o.size[1] + 2 * p])
+    if footprint[1] > max(bed[:2]) or footprint[0] > min(bed[:2]):
+        yield DesignProblem("printing.printer.bed_mm",
+                            f"the case halves ({o.size[0]:.0f} x {o.size[1] + 2 * p:.0f} mm with "
+                            f"lugs) do not fit the {bed[0]:g} x {bed[1]:g} mm bed")
+    # the vents must reach the configured area (checked on the geometry too)
+    v = rig.desc.enclosure.vents
+    vents = lay.case.vents
+    need = v.min_area_ratio * 2 * lay.cooling.part.inlet_area_mm2
+    have = sum(b.size[2] * (b.size[0] if b.size[1] > b.size[0] else b.size[1]) for b in vents)
+    if have < need:
+        yield DesignProblem("enclosure.vents.slot_length_mm",
+                            f"the walls take {len(vents)} slots, {have:.0f} mm^2 open; the fans need "
+                            f"{need:.0f} mm^2 (min_area_ratio {v.min_area_ratio:g}); use longer or wider slots")

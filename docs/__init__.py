@@ -1,0 +1,1 @@
+"""The project's documentation; :mod:`docs.guide` generates the assembly guide site from the CAD model."""
