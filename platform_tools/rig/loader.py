@@ -13,8 +13,8 @@ from .model import Rig
 from .overrides import Override, OverrideError, apply_overrides, override_for, parse_override
 from .rules import check_rules
 from .schema import RigDescription
-from .typed import Problem, convert
-from .yamlsource import YamlSource, YamlSourceError, load_yaml_file
+from .typed import Problem
+from .yamlsource import YamlSource, load_typed
 
 #: the rig description of this repository
 DEFAULT_RIG = Path(__file__).resolve().parents[2] / "config" / "rig.yaml"
@@ -33,21 +33,13 @@ def _locate(problem: Problem, source: YamlSource, overrides: Sequence[Override])
 def load_rig(path: Path | str | None = None, overrides: Sequence[str] = ()) -> Rig:
     """Read, override, type-check and rule-check a rig description. Raises :class:`RigError`."""
     path = Path(path) if path is not None else DEFAULT_RIG
-    try:
-        source = load_yaml_file(path)
-        parsed = [parse_override(o) for o in overrides]
-        data = source.data
-        if not isinstance(data, dict):
-            raise RigError([f"{path}: expected a YAML mapping at the top level, got {type(data).__name__}"])
-        data = apply_overrides(data, parsed, RigDescription)
-    except (YamlSourceError, OverrideError) as exc:
-        raise RigError([str(exc)]) from None
+    parsed: list[Override] = []
 
-    desc, problems = convert(RigDescription, data)
-    if problems:
-        raise RigError([_locate(p, source, parsed) for p in problems])
-    rig = Rig(desc, path, tuple(overrides))
-    problems = check_rules(rig)
-    if problems:
-        raise RigError([_locate(p, source, parsed) for p in problems])
-    return rig
+    def prepare(data: dict) -> dict:
+        parsed.extend(parse_override(o) for o in overrides)
+        return apply_overrides(data, parsed, RigDescription)
+
+    typed = load_typed(path, RigDescription, RigError, prepare=prepare, prepare_errors=(OverrideError,),
+                       rules=lambda desc: check_rules(Rig(desc, path, tuple(overrides))),
+                       locate=lambda problem, source: _locate(problem, source, parsed))
+    return Rig(typed.value, path, tuple(overrides))
