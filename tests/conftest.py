@@ -22,6 +22,13 @@ def rig_text() -> str:
     return RIG_YAML.read_text()
 
 
+@pytest.fixture(scope="session")
+def rig():
+    """The rig description as shipped (config/rig.yaml), loaded once: the one rig fixture of the suite."""
+    from platform_tools.rig import load_rig
+    return load_rig()
+
+
 def run_tool(module: str, *args: str, cwd: Path | None = None, timeout: float = 120) -> subprocess.CompletedProcess:
     """Run a console script of this project as a user would (a fresh process), capturing its output."""
     env = dict(os.environ, COLUMNS="120")
