@@ -41,7 +41,7 @@ from calibration.detect import detect_corners  # noqa: E402
 from calibration.intrinsics.sensitivity import parameter_shift, problem_at_truth, projection_shift  # noqa: E402
 from calibration.synth import render_dataset  # noqa: E402
 from calibration.synth.difficulty import level  # noqa: E402
-from calibration.validate import central_mask  # noqa: E402
+from calibration.lens.compare import central_mask  # noqa: E402
 
 import bench_detection  # noqa: E402  (its 8-bit conversion and the reference tools' runs)
 

@@ -25,7 +25,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from calibration.extrinsics.cad import CAMERAS  # noqa: E402
-from calibration.extrinsics.outputs import CameraIntrinsics  # noqa: E402
+from platform_tools.rig.cameras import camera_model  # noqa: E402
 from calibration.extrinsics.solve import mapping_error_px, rgb_to_thermal_px  # noqa: E402
 from calibration.rigsynth import render_rig_dataset  # noqa: E402
 from platform_tools.rig.frames import Pose  # noqa: E402
@@ -83,7 +83,7 @@ def main() -> int:
     print(f"worst: refined vs truth {worst[0]:.3f} mm {worst[1]:.4f} deg; CAD difference recovered to "
           f"{worst[2]:.3f} mm {worst[3]:.4f} deg (target 1 mm, 0.05 deg): "
           f"{'MET' if worst[0] < 1 and worst[1] < 0.05 and worst[2] < 1 and worst[3] < 0.05 else 'NOT MET'}")
-    lens = {c: CameraIntrinsics(cams[c]["lensmodel"], np.array(cams[c]["intrinsics"]), tuple(cams[c]["imagersize"]))
+    lens = {c: camera_model(cams[c]["lensmodel"], cams[c]["intrinsics"], tuple(cams[c]["imagersize"]))
             for c in CAMERAS}
     print("RGB (ZED left) to thermal reprojection error against the true mapping (true lenses), RMS / max px:")
     for th in ("thermal_left", "thermal_right"):

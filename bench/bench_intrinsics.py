@@ -2,7 +2,7 @@
 
 Renders a "real" synthetic set (default 40 images, a square 8x8 board so that mrgingham can run on it
 too), then calibrates it several ways and compares each result with the true lens (projection
-difference after the best-fit rotation, whole image and central 80%; calibration.validate), with
+difference after the best-fit rotation, whole image and central 80%; calibration.lens.compare), with
 calibrate thermal's verdict (ours only: the others have none) and the time, also as a ratio to ours:
 
   ours (default)  calibrate thermal (our detector + in-process mrcal, default lens model)
@@ -31,9 +31,9 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from calibration.intrinsics import kannala_brandt as kb  # noqa: E402
+from calibration.lens import kannala_brandt as kb  # noqa: E402
 from calibration.synth import render_dataset  # noqa: E402
-from calibration.validate import compare  # noqa: E402
+from calibration.lens.compare import compare  # noqa: E402
 
 BOARD = (8, 8)
 SQUARE = 0.04

@@ -8,7 +8,7 @@ from pathlib import Path
 from platform_tools.rig import atomic
 from platform_tools.rig.conventions import UserError, add_output_options, print_json
 
-from calibration.corners_io import BoardCorners, format_corners
+from calibration.formats.corners_vnl import BoardCorners, format_corners
 from calibration.detect import ImageError, detect_files, list_images
 from calibration.commands.synth import parse_board
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from platform_tools.rig.conventions import CheckFailed, UserError, add_output_options, print_json
 
-from calibration.validate import compare_models
+from calibration.lens.compare import compare_models
 
 # the accuracy targets on a "real" synthetic set (pixels)
 TARGET_RMS_PX = 0.1

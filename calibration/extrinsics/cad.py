@@ -50,9 +50,9 @@ class FrameTree:
 
 def camera_boxes(rig: Rig) -> dict[str, object]:
     """The body of each camera (ZED X; each Boson core with its lens) as a box in the rig frame."""
-    from cad.design import placed_bounds
-    from cad.vendor.boson import BosonCore, BosonLens
-    from cad.vendor.zed_x import ZedX
+    from cad.geom import placed_bounds
+    from cad.bought.boson import BosonCore, BosonLens
+    from cad.bought.zed_x import ZedX
     s = rig.desc.sensors
     frames = rig.sensor_frames()
     zed = ZedX.from_rig(rig, s.zed_x.part)
@@ -90,7 +90,7 @@ def cad_frames(rig: Rig) -> FrameTree:
     if problems:
         raise RigGeometryError(problems)
     from cad.assembly import build, camera_frames
-    from cad.design import DesignError
+    from cad.layout import DesignError
     try:
         asm = build(rig)      # places every part; no geometry is built until a shape is asked for
     except DesignError as exc:

@@ -2,7 +2,8 @@
 URDF of the rig's frames, mrcal .cameramodel files and a ROS 2 launch snippet of static transforms.
 
 All of them are written from one :class:`~calibration.extrinsics.cad.FrameTree` (poses in the rig
-frame, mm) and one set of camera models (intrinsics); lengths are metres in every file robots read
+frame, mm) and one set of camera models (``mrcal.cameramodel`` per camera short name: only their lenses are
+used); lengths are metres in every file robots read
 (URDF, launch, Kalibr, mrcal) and mm in extrinsics.yaml, where every key says its unit.
 """
 from __future__ import annotations
@@ -10,11 +11,11 @@ from __future__ import annotations
 import io
 import math
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
 
 import numpy as np
 import yaml
 
+from platform_tools.rig.cameras import camera_model, imagersize
 from platform_tools.rig.frames import Pose
 
 from .cad import CAMERAS, IMU, TOPIC_KEYS, FrameTree
@@ -26,14 +27,6 @@ CONVENTION = (
     "Translations in mm (xyz_mm) unless the key says metres; rpy_deg is URDF roll-pitch-yaw "
     "(fixed axes x, y, z: R = Rz(yaw) Ry(pitch) Rx(roll)); quaternion_xyzw is ROS order; "
     "rotvec_rad is Rodrigues (axis * angle) as mrcal's rt and OpenCV's rvec.")
-
-
-@dataclass(frozen=True)
-class CameraIntrinsics:
-    """One camera's lens as mrcal names it (``LENSMODEL_*``, intrinsics, imagersize (W, H))."""
-    lensmodel: str
-    intrinsics: np.ndarray
-    imagersize: tuple[int, int]
 
 
 def _clean(v: float, nd: int = 9) -> float:
@@ -67,7 +60,7 @@ def _m(T: Pose) -> list[list[float]]:
     return [[_clean(x, 12) for x in row] for row in M]
 
 
-def kalibr_camchain(tree: FrameTree, lenses: dict[str, CameraIntrinsics], topics: dict[str, str]) -> str:
+def kalibr_camchain(tree: FrameTree, lenses: dict, topics: dict[str, str]) -> str:
     """Kalibr camchain: cam0..cam3 = zed_left, zed_right, thermal_left, thermal_right; T_cn_cnm1
     maps camera n-1 into camera n, T_cam_imu maps the IMU into the camera (metres). Intrinsics are
     Kalibr's pinhole with radtan (the ZED's rectified images) or equidistant (the Boson's fisheye,
@@ -76,20 +69,21 @@ def kalibr_camchain(tree: FrameTree, lenses: dict[str, CameraIntrinsics], topics
     prev = None
     for i, (short, frame) in enumerate(CAMERAS.items()):
         lens = lenses[short]
-        fx, fy, cx, cy = (float(x) for x in lens.intrinsics[:4])
-        if lens.lensmodel == "LENSMODEL_PINHOLE":
+        lensmodel, intrinsics = lens.intrinsics()
+        fx, fy, cx, cy = (float(x) for x in intrinsics[:4])
+        if lensmodel == "LENSMODEL_PINHOLE":
             dist_model, coeffs = "radtan", [0.0, 0.0, 0.0, 0.0]
-        elif lens.lensmodel in ("LENSMODEL_STEREOGRAPHIC",):
+        elif lensmodel in ("LENSMODEL_STEREOGRAPHIC",):
             dist_model, coeffs = "equidistant", [0.0, 0.0, 0.0, 0.0]
             note.append(f"cam{i} ({short}): nominal fisheye written as equidistant f*theta, zero coefficients")
         else:
-            from ..formats.conversions import Lens as FLens, nearest_kalibr
-            rep = nearest_kalibr(FLens(lens.lensmodel, np.asarray(lens.intrinsics, float), lens.imagersize))
+            from ..formats.conversions import nearest_kalibr
+            rep = nearest_kalibr(lens)
             fx, fy, cx, cy = rep.K[0, 0], rep.K[1, 1], rep.K[0, 2], rep.K[1, 2]
             dist_model, coeffs = "equidistant", [float(x) for x in rep.D]
             note.append(f"cam{i} ({short}): {rep.note()}")
         entry = {"camera_model": "pinhole", "intrinsics": [float(fx), float(fy), float(cx), float(cy)], "distortion_model": dist_model,
-                 "distortion_coeffs": coeffs, "resolution": [int(lens.imagersize[0]), int(lens.imagersize[1])],
+                 "distortion_coeffs": coeffs, "resolution": list(imagersize(lens)),
                  "rostopic": topics.get(TOPIC_KEYS[short], f"/{short}/image_raw"),
                  "cam_overlaps": [j for j in range(len(CAMERAS)) if j != i],
                  "T_cam_imu": _m(tree.T(frame, IMU))}
@@ -142,17 +136,16 @@ def launch_xml(tree: FrameTree) -> str:
     return ET.tostring(root, encoding="unicode") + "\n"
 
 
-def cameramodel_text(tree: FrameTree, short: str, lens: CameraIntrinsics, note: str,
+def cameramodel_text(tree: FrameTree, short: str, lens, note: str,
                      optimization_inputs: dict | None = None) -> str:
-    """An mrcal .cameramodel: the lens and ``rt_fromref`` = the rig frame into the camera (metres)."""
+    """An mrcal .cameramodel: the lens of ``lens`` (an mrcal.cameramodel; its pose is not used) and
+    ``rt_fromref`` = the rig frame into the camera (metres)."""
     import mrcal
     rt = tree.camera(short).inverse().rt(metres=True)
     kw = {}
     if optimization_inputs is not None:
         kw = dict(optimization_inputs=optimization_inputs["inputs"], icam_intrinsics=optimization_inputs["icam"])
-    model = mrcal.cameramodel(intrinsics=(lens.lensmodel, np.asarray(lens.intrinsics, float)),
-                              imagersize=np.asarray(lens.imagersize), extrinsics_rt_fromref=rt, **kw) \
-        if not kw else mrcal.cameramodel(**kw)
+    model = camera_model(*lens.intrinsics(), imagersize(lens), rt) if not kw else mrcal.cameramodel(**kw)
     if kw:
         model.extrinsics_rt_fromref(rt)
     buf = io.StringIO()
@@ -160,14 +153,14 @@ def cameramodel_text(tree: FrameTree, short: str, lens: CameraIntrinsics, note: 
     return buf.getvalue()
 
 
-def nominal_lenses(rig) -> dict[str, CameraIntrinsics]:
+def nominal_lenses(rig) -> dict:
+    """camera short name (zed_left, ...) -> its nominal ``mrcal.cameramodel`` (platform_tools.rig.nominal)."""
     from platform_tools.rig.nominal import nominal_cameras
     by_frame = nominal_cameras(rig)
-    return {short: CameraIntrinsics(*by_frame[f].intrinsics(), tuple(int(x) for x in by_frame[f].imagersize()))
-            for short, f in CAMERAS.items()}
+    return {short: by_frame[f] for short, f in CAMERAS.items()}
 
 
-def all_files(tree: FrameTree, lenses: dict[str, CameraIntrinsics], rig, *, source: str,
+def all_files(tree: FrameTree, lenses: dict, rig, *, source: str,
               extra: dict | None = None, models: dict[str, str] | None = None) -> dict[str, str]:
     """Every output file, name -> text."""
     topics = dict(rig.to_data().get("on_device", {}).get("topics", {}))

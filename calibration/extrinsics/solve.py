@@ -22,11 +22,11 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from platform_tools.rig.cameras import camera_model, imagersize
 from platform_tools.rig.frames import Pose
 
-from ..quiet import quiet_stderr
+from calibration.intrinsics.quiet import quiet_stderr
 from .cad import CAMERAS, FrameTree
-from .outputs import CameraIntrinsics
 from .sets import RigObservations
 
 LENSMODEL = "LENSMODEL_OPENCV8"
@@ -40,22 +40,24 @@ class RigSolveError(Exception):
 @dataclass
 class RigSolution:
     T_ref_cam: dict[str, Pose]            # refined: camera optical frame in the ZED left optical frame (mm)
-    lenses: dict[str, CameraIntrinsics]
+    lenses: dict                       # camera short name -> solved mrcal.cameramodel (OPENCV8)
     inputs: dict                          # mrcal optimization_inputs of the final solve
     rms_px: dict[str, float]              # per camera, inliers
     n_obs: dict[str, int]
     n_outliers: int
 
 
-def as_opencv8(lens: CameraIntrinsics) -> np.ndarray:
-    p = np.asarray(lens.intrinsics, dtype=float)
-    if lens.lensmodel == LENSMODEL:
+def as_opencv8(lens) -> np.ndarray:
+    """The OPENCV8 intrinsics (12,) of ``lens`` (an mrcal.cameramodel of a pinhole or OPENCV4/5/8 lens)."""
+    lensmodel, p = lens.intrinsics()
+    p = np.asarray(p, dtype=float)
+    if lensmodel == LENSMODEL:
         return p.copy()
-    if lens.lensmodel in ("LENSMODEL_PINHOLE", "LENSMODEL_OPENCV4", "LENSMODEL_OPENCV5"):
+    if lensmodel in ("LENSMODEL_PINHOLE", "LENSMODEL_OPENCV4", "LENSMODEL_OPENCV5"):
         out = np.zeros(12)
         out[:len(p)] = p
         return out
-    raise RigSolveError(f"cannot seed {lens.lensmodel} as {LENSMODEL}; give an OPENCV4/5/8 or pinhole model")
+    raise RigSolveError(f"cannot seed {lensmodel} as {LENSMODEL}; give an OPENCV4/5/8 or pinhole model")
 
 
 def _pnp(q: np.ndarray, lens: tuple[str, np.ndarray], obj_m: np.ndarray) -> Pose | None:
@@ -174,13 +176,13 @@ def _rms(oi: dict, obs_cams: np.ndarray) -> tuple[dict[str, float], int]:
     return out, int(np.sum(w <= 0))
 
 
-def solve_rig(obs: RigObservations, seeds: dict[str, CameraIntrinsics], cad: FrameTree, *,
+def solve_rig(obs: RigObservations, seeds: dict, cad: FrameTree, *,
               zed_intrinsics: str = "fixed") -> RigSolution:
     with quiet_stderr():
         return _solve_rig(obs, seeds, cad, zed_intrinsics)
 
 
-def _solve_rig(obs: RigObservations, seeds: dict[str, CameraIntrinsics], cad: FrameTree,
+def _solve_rig(obs: RigObservations, seeds: dict, cad: FrameTree,
                zed_intrinsics: str) -> RigSolution:
     import mrcal
     if zed_intrinsics not in ("fixed", "solved"):
@@ -210,7 +212,7 @@ def _solve_rig(obs: RigObservations, seeds: dict[str, CameraIntrinsics], cad: Fr
     T = {"zed_left": Pose.identity()}
     for k, c in enumerate(ORDER[1:]):
         T[c] = Pose.from_rt(oi["extrinsics_rt_fromref"][k], metres=True).inverse()
-    lenses = {c: CameraIntrinsics(LENSMODEL, oi["intrinsics"][k].copy(), tuple(obs.imagersizes[c]))
+    lenses = {c: camera_model(LENSMODEL, oi["intrinsics"][k].copy(), tuple(obs.imagersizes[c]))
               for k, c in enumerate(ORDER)}
     n_obs = {c: int(np.sum(cams == k)) for k, c in enumerate(ORDER)}
     return RigSolution(T, lenses, oi, rms, n_obs, n_out)
@@ -236,19 +238,20 @@ def difference(a: Pose, b: Pose) -> tuple[float, float, Pose]:
     return float(np.linalg.norm(D.t)), D.angle_deg(), D
 
 
-def rgb_to_thermal_px(zed: CameraIntrinsics, thermal: CameraIntrinsics, T_th_zed: Pose, depth_m: float,
+def rgb_to_thermal_px(zed, thermal, T_th_zed: Pose, depth_m: float,
                       grid: tuple[int, int] = (24, 15)) -> np.ndarray:
     """Where points at ``depth_m`` (along the ZED left's optical axis) seen on a grid of ZED left pixels
-    land in the thermal image, through ``T_th_zed``; (N, 2), NaN outside the thermal image."""
+    land in the thermal image, through ``T_th_zed`` (mm); ``zed``, ``thermal``: mrcal.cameramodel (their lenses);
+    (N, 2) px, NaN outside the thermal image."""
     import mrcal
-    W, H = zed.imagersize
+    W, H = imagersize(zed)
     xs, ys = np.meshgrid(np.linspace(0.05, 0.95, grid[0]) * (W - 1), np.linspace(0.05, 0.95, grid[1]) * (H - 1))
     q = np.stack([xs.ravel(), ys.ravel()], axis=1)
-    v = mrcal.unproject(np.ascontiguousarray(q), zed.lensmodel, np.asarray(zed.intrinsics, float))
+    v = mrcal.unproject(np.ascontiguousarray(q), *zed.intrinsics())
     p = v / v[:, 2:3] * depth_m * 1000.0
     pt = T_th_zed.apply(p) / 1000.0
-    out = mrcal.project(np.ascontiguousarray(pt), thermal.lensmodel, np.asarray(thermal.intrinsics, float))
-    Wt, Ht = thermal.imagersize
+    out = mrcal.project(np.ascontiguousarray(pt), *thermal.intrinsics())
+    Wt, Ht = imagersize(thermal)
     ok = (pt[:, 2] > 0) & (out[:, 0] >= 0) & (out[:, 0] <= Wt - 1) & (out[:, 1] >= 0) & (out[:, 1] <= Ht - 1)
     out[~ok] = np.nan
     return out

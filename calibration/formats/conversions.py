@@ -1,6 +1,7 @@
 """From a solved lens to the distortion models other tools know, exactly where possible.
 
-A solved lens is an mrcal model (``LENSMODEL_*`` + intrinsics) or OpenCV's Kannala-Brandt fisheye.
+A solved lens is an ``mrcal.cameramodel`` (the project's one camera value) or, for OpenCV's Kannala-Brandt
+fisheye that mrcal cannot hold, a :class:`~calibration.lens.kannala_brandt.KannalaBrandt`.
 Target families and their names in each tool:
 
 - ``plumb_bob`` (ROS) = OpenCV k1 k2 p1 p2 k3 = mrcal OPENCV4 / OPENCV5 (exact);
@@ -17,26 +18,28 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..intrinsics import kannala_brandt as kb
-from ..intrinsics.lensfit import LensFit, fit_lensmodel, mrcal_unprojector
+from platform_tools.rig.cameras import imagersize
+
+from calibration.lens import kannala_brandt as kb
+from calibration.lens.fit import LensFit, fit_lensmodel, mrcal_unprojector
 
 
-@dataclass(frozen=True)
-class Lens:
-    lensmodel: str                 # an mrcal LENSMODEL_* name, or kannala_brandt.NAME
-    params: np.ndarray             # fx fy cx cy distortion...
-    imagersize: tuple[int, int]
+def unprojector(lens):
+    """(..., 2) pixels -> (..., 3) unit rays of ``lens``: an mrcal.cameramodel or a
+    :class:`~calibration.lens.kannala_brandt.KannalaBrandt`."""
+    lensmodel, params = lens.intrinsics()
+    if lensmodel == kb.NAME:
+        return lambda q: kb.unproject(q, params)
+    return mrcal_unprojector(lensmodel, params)
 
-    def unprojector(self):
-        if self.lensmodel == kb.NAME:
-            return lambda q: kb.unproject(q, self.params)
-        return mrcal_unprojector(self.lensmodel, self.params)
 
-    def projector(self):
-        if self.lensmodel == kb.NAME:
-            return lambda v: kb.project(v, self.params)
-        import mrcal
-        return lambda v: mrcal.project(np.ascontiguousarray(v, dtype=float), self.lensmodel, self.params)
+def projector(lens):
+    """(..., 3) rays -> (..., 2) pixels of ``lens`` (as :func:`unprojector`)."""
+    lensmodel, params = lens.intrinsics()
+    if lensmodel == kb.NAME:
+        return lambda v: kb.project(v, params)
+    import mrcal
+    return lambda v: mrcal.project(np.ascontiguousarray(v, dtype=float), lensmodel, params)
 
 
 @dataclass(frozen=True)
@@ -67,9 +70,9 @@ def _K(p: np.ndarray) -> np.ndarray:
     return np.array([[p[0], 0.0, p[2]], [0.0, p[1], p[3]], [0.0, 0.0, 1.0]])
 
 
-def _exact(lens: Lens, family: str) -> Representation | None:
-    p = np.asarray(lens.params, dtype=float)
-    lm = lens.lensmodel
+def _exact(lens, family: str) -> Representation | None:
+    lm, p = lens.intrinsics()
+    p = np.asarray(p, dtype=float)
     if family == "equidistant" and lm == kb.NAME:
         return Representation(family, _K(p), p[4:8].copy(), None, lm)
     if family == "plumb_bob" and lm in ("LENSMODEL_OPENCV4", "LENSMODEL_OPENCV5", "LENSMODEL_PINHOLE"):
@@ -84,22 +87,25 @@ def _exact(lens: Lens, family: str) -> Representation | None:
     return None
 
 
-def representation(lens: Lens, family: str) -> Representation:
-    """``lens`` in ``family``: exact if it is one, else the nearest fit over the whole imager."""
+def representation(lens, family: str) -> Representation:
+    """``lens`` (an mrcal.cameramodel, or a KannalaBrandt) in ``family``: exact if it is one, else the
+    nearest fit over the whole imager."""
     exact = _exact(lens, family)
     if exact is not None:
         return exact
-    src = lens.unprojector()
-    core = np.asarray(lens.params, dtype=float)[:4]
+    src = unprojector(lens)
+    lensmodel, params = lens.intrinsics()
+    core = np.asarray(params, dtype=float)[:4]
+    size = imagersize(lens)
     if family == "equidistant":
-        f = kb.fit(src, lens.imagersize, core)
-        return Representation(family, _K(f.intrinsics), f.intrinsics[4:8], f, lens.lensmodel)
+        f = kb.fit(src, size, core)
+        return Representation(family, _K(f.intrinsics), f.intrinsics[4:8], f, lensmodel)
     target = {"rational_polynomial": "LENSMODEL_OPENCV8", "plumb_bob": "LENSMODEL_OPENCV5"}[family]
-    f = fit_lensmodel(src, lens.imagersize, target, core)
-    return Representation(family, _K(f.intrinsics), f.intrinsics[4:], f, lens.lensmodel)
+    f = fit_lensmodel(src, size, target, core)
+    return Representation(family, _K(f.intrinsics), f.intrinsics[4:], f, lensmodel)
 
 
-def nearest_for_ros(lens: Lens) -> Representation:
+def nearest_for_ros(lens) -> Representation:
     """The ROS distortion model matching the lens: exact where one exists (OPENCV4/5 -> plumb_bob,
     OPENCV8 -> rational_polynomial, Kannala-Brandt -> equidistant), else the better of the
     rational_polynomial and equidistant fits."""
@@ -111,7 +117,7 @@ def nearest_for_ros(lens: Lens) -> Representation:
     return min(fits, key=lambda r: r.fit.rms_px)
 
 
-def nearest_kalibr(lens: Lens) -> Representation:
+def nearest_kalibr(lens) -> Representation:
     """Kalibr's pinhole cameras know radtan (= plumb_bob without k3) and equidistant; for a fisheye
     the equidistant (pinhole-equi) model is the one to use: exact for Kannala-Brandt, fitted else."""
     return representation(lens, "equidistant")

@@ -1,10 +1,13 @@
 """Thermal intrinsics: corner observations in (:mod:`.observations`), a solved lens out.
 
 - :mod:`.mrcal_solver`: mrcal in-process (OPENCV8 or SPLINED_STEREOGRAPHIC, :mod:`.lensmodels`);
-- :mod:`.opencv_solver`: cv2.fisheye (Kannala-Brandt, :mod:`.kannala_brandt`);
-- :mod:`.lensfit`: the nearest model of one kind to a lens of another;
+- :mod:`.opencv_solver`: cv2.fisheye (Kannala-Brandt, :mod:`calibration.lens.kannala_brandt`);
+- :mod:`.crossval`: the two halves' disagreement; :mod:`.sensitivity`: first-order bias of a solve;
 - :mod:`.synthetic_corners`: observations through a known lens, for tests and the bench;
-- :mod:`.outputs`: every file ``calibrate thermal`` writes.
+- :mod:`.quiet`: mrcal's C-level stderr chatter kept off the terminal.
+
+Lens fitting lives in :mod:`calibration.lens`; every file ``calibrate thermal`` writes in
+:mod:`calibration.thermal`.
 """
 from .mrcal_solver import Solution, SolveError
 from .observations import BoardObservations, from_detections

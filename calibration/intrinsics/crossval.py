@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import kannala_brandt as kb
-from .lensfit import robust_unproject
+from calibration.lens import kannala_brandt as kb
+from calibration.lens.fit import robust_unproject
 from .mrcal_solver import MIN_IMAGES, Solution
 
 GRID_WIDTH = 32          # the validity grid: 32 x 26 points over a 640 x 512 imager, border included
@@ -78,7 +78,7 @@ def _opencv_half(solution: Solution, idx: np.ndarray):
 def cross_validate(solution: Solution, *, grid_width: int = GRID_WIDTH) -> CrossValidation | None:
     """The halves' disagreement across the image; None when a half would have fewer than
     mrcal_solver.MIN_IMAGES images (too few to solve: the caller says so)."""
-    from ..validate import compare
+    from calibration.lens.compare import compare
     a, b = split(solution)
     if min(len(a), len(b)) < MIN_IMAGES:
         return None

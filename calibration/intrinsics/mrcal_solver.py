@@ -3,8 +3,9 @@
 The sequence follows mrcal's own calibration tool: a stereographic seed from the nominal focal length
 (board poses by PnP), geometry-only then core-only presolves, then the full model. Differences:
 
-- OPENCV8 starts from a fit to the presolved stereographic lens (lensfit), not from zero
-  distortion, so a 95 deg lens starts close to where it ends.
+- OPENCV8 starts from the presolved stereographic lens expressed as OPENCV8 (a linear fit of its
+  radial profile, calibration/lens/radial.py), not from zero distortion, so a 95 deg lens starts close
+  to where it ends, and the same data always starts from the same seed.
 - A splined model first gets an OPENCV8-free stereographic core, which is then fixed (as mrcal's
   tool does: the core is redundant with the spline), and the knots' fov_x covers the measured field.
 - Board poses are re-estimated by PnP through the model solved so far, while that helps.
@@ -18,8 +19,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from calibration.lens.fit import fit_lensmodel, mrcal_unprojector
+from calibration.lens.radial import opencv8_from_stereographic
+
 from . import lensmodels
-from .lensfit import fit_lensmodel, mrcal_unprojector
 from .observations import BoardObservations
 
 
@@ -181,6 +184,10 @@ def _expand(pre: dict, lensmodel: str, imagersize: tuple[int, int]) -> tuple[np.
         x = np.zeros(n)
         x[:4] = core
         return x, False
+    if lensmodel == "LENSMODEL_OPENCV8":
+        # linear and exact for one input: an iterative pixel fit ended anywhere in the rational terms'
+        # valley of near-equal fits, so the same data solved differently after other work in the process
+        return opencv8_from_stereographic(core, imagersize), True
     fit = fit_lensmodel(mrcal_unprojector("LENSMODEL_STEREOGRAPHIC", core), imagersize, lensmodel, core)
     return fit.intrinsics, True
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import kannala_brandt as kb
+from calibration.lens import kannala_brandt as kb
 from .mrcal_solver import (IMAGE_OUTLIER_FACTOR, IMAGE_OUTLIER_FLOOR_PX, MIN_CORNERS_PER_IMAGE,
                            MIN_IMAGES, RejectedImage, Solution, SolveError, _check_enough)
 from .observations import BoardObservations

@@ -71,14 +71,14 @@ def parameter_shift(optimization_inputs: dict, corner_errors: np.ndarray) -> dic
 def projection_shift(lensmodel: str, intrinsics: np.ndarray, d_intrinsics: np.ndarray,
                      imagersize: tuple[int, int], *, grid_width: int = 64) -> tuple[np.ndarray, np.ndarray]:
     """First-order projection difference (pixels) over the imager when ``intrinsics`` move by
-    ``d_intrinsics``, after the best-fit rotation (as calibration.validate and mrcal's projection_diff
+    ``d_intrinsics``, after the best-fit rotation (as calibration.lens.compare and mrcal's projection_diff
     compare two lenses). Linear like :func:`parameter_shift`: a near-degenerate direction of the lens
     model (OPENCV8's rational terms growing together) moves its parameters a lot and its projection
     little, and evaluating the moved model exactly would mix a second-order effect into a first-order
     answer. Returns (grid (Ny, Nx, 2), difference (Ny, Nx); NaN where the unprojection failed)."""
     import mrcal
 
-    from .lensfit import imager_grid
+    from calibration.lens.fit import imager_grid
     grid = imager_grid(imagersize, grid_width)
     q = grid.reshape(-1, 2)
     v = mrcal.unproject(np.ascontiguousarray(q), lensmodel, np.asarray(intrinsics, float), normalize=True)

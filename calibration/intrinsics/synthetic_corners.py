@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .lensfit import fit_lensmodel
+from calibration.lens.fit import fit_lensmodel
 from .observations import BoardObservations
 
 

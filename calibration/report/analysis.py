@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..intrinsics.lensfit import imager_grid, robust_unproject
-from ..validate import central_mask
+from calibration.lens.fit import imager_grid, robust_unproject
+from calibration.lens.compare import central_mask
 
 REGION_NAMES = (("top-left corner", "top edge", "top-right corner"),
                 ("left edge", "centre", "right edge"),
@@ -66,7 +66,7 @@ def _despike(s: np.ndarray, grid: np.ndarray, model) -> np.ndarray:
     pixel to either side. A real rise (towards an unobserved corner) is smooth and stays."""
     import mrcal
     from scipy.ndimage import median_filter
-    from ..intrinsics.lensfit import robust_unproject
+    from calibration.lens.fit import robust_unproject
     fin = np.where(np.isfinite(s), s, np.nan)
     med = median_filter(np.nan_to_num(fin, nan=np.nanmax(fin) if np.isfinite(fin).any() else 1.0), size=3,
                         mode="nearest")

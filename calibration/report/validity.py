@@ -12,7 +12,7 @@ The largest connected trusted area becomes the valid-intrinsics region, a closed
 pixels, written into the .cameramodel as mrcal's ``valid_intrinsics_region`` (mrcal-show-*,
 mrcal.is_within_valid_intrinsics_region read it). The untrusted parts are named by ninth of the
 image ("the top-left corner") with what failed there, for the verdict, which also reads how much of
-the central 80% of the image is trusted (the same rectangle as calibration.validate.central_mask).
+the central 80% of the image is trusted (the same rectangle as calibration.lens.compare.central_mask).
 """
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..validate import central_mask
+from calibration.lens.compare import central_mask
 from .analysis import REGION_NAMES
 
 NO_DATA_RADIUS_PX = 50.0        # no observed corner nearer than this: no data (~8% of a 640 px width)

@@ -41,7 +41,7 @@ MAX_RMS_PX = 0.5                     # RMS reprojection error of inlier corners
 MAX_REJECTED_IMAGE_FRACTION = 0.2
 MAX_UNTRUSTED_SHARE = 0.01           # of the image (validity grid points) outside the trusted region:
                                      # more, and the model is at best trusted within its region
-# trusted-within-region: the central 80% of the image (calibration.validate.central_mask, 480 of the
+# trusted-within-region: the central 80% of the image (calibration.lens.compare.central_mask, 480 of the
 # 832 points of the 32 x 26 validity grid of a 640 x 512 imager) trusted at >= 99% of its points, i.e.
 # all but a stray point or four: untrusted points in the middle of the image are a real fault (no
 # boards there, halves disagreeing), not corners the boards missed.

@@ -9,8 +9,8 @@
   coloured background, a little blur and noise) through the ZED's nominal lens: a pinhole with
   f = focal length / pixel pitch and the principal point at the centre (the ZED publishes rectified
   images, for which a pinhole is exact). ``rgb_scale`` renders at a reduced size for speed: the
-  imager is round(W s) x round(H s) and the intrinsics are scaled consistently (f s, (c + 0.5) s - 0.5),
-  so the truth is exactly the lens of the rendered images.
+  imager is round(W s) x round(H s) and the intrinsics are scaled to it by the project's one resize rule
+  (``platform_tools.rig.cameras.scaled``), so the truth is exactly the lens of the rendered images.
 - Board poses are drawn in the rig frame, 0.8 to 2.2 m ahead, facing the rig (tilted up to 35 deg,
   rolled +-10 deg: upright, so every camera sees the same top-left corner); a pose is kept only when
   every corner is inside every camera's image with a margin and squares are at least 8 px.
@@ -32,12 +32,15 @@ import cv2
 import numpy as np
 
 from platform_tools.rig import atomic
+from platform_tools.rig.cameras import camera_model, imagersize, scaled
 from platform_tools.rig.frames import Pose, rotvec_to_matrix
+from platform_tools.rig.nominal import nominal_camera
 from platform_tools.rig.progress import progress
 
 from ..extrinsics.cad import CAMERAS, FrameTree, cad_frames
 from ..extrinsics.outputs import pose_dict
-from ..synth import Board, Lens, nominal_thermal_lens
+from ..synth import Board, nominal_thermal_lens
+from ..synth.lens import project
 from ..synth.difficulty import level
 from ..synth.poses import BoardView
 from ..synth.render import Look, board_layer, render_image
@@ -53,32 +56,30 @@ RGB_SUPERSAMPLE = 2
 T0_NS = 1_700_000_000_000_000_000
 
 
-def zed_lens(rig, scale: float = 1.0) -> Lens:
-    """The ZED's nominal pinhole at ``scale`` of its full imager (intrinsics scaled consistently)."""
-    spec = rig.camera_model(rig.desc.sensors.zed_x.camera_model)
-    return scaled_pinhole(rig.focal_px(spec), spec.width_px, spec.height_px, scale)
+def zed_lens(rig, scale: float = 1.0):
+    """The ZED's nominal pinhole (an mrcal.cameramodel) for images of round(W s) x round(H s) px
+    (``platform_tools.rig.cameras.scaled``: the one resize rule)."""
+    nominal = nominal_camera(rig, CAMERAS["zed_left"])
+    W, H = imagersize(nominal)
+    return scaled(nominal, (int(round(W * scale)), int(round(H * scale))), what=f"rgb_scale={scale}")
 
 
-def scaled_pinhole(f: float, width: int, height: int, scale: float) -> Lens:
-    cx, cy = (width - 1) / 2.0, (height - 1) / 2.0
-    W, H = int(round(width * scale)), int(round(height * scale))
-    return Lens("LENSMODEL_PINHOLE", (f * scale, f * scale, (cx + 0.5) * scale - 0.5, (cy + 0.5) * scale - 0.5),
-                (W, H))
-
-
-def true_lenses(rig, rng: np.random.Generator, rgb_scale: float) -> dict[str, Lens]:
+def true_lenses(rig, rng: np.random.Generator, rgb_scale: float) -> dict:
+    """camera short name -> its true lens (an mrcal.cameramodel, identity pose): the ZED's nominal
+    pinhole at ``rgb_scale``, and each thermal camera's nominal lens with its focal length and principal
+    point moved a little (see the module docstring)."""
     out = {}
     z = zed_lens(rig, rgb_scale)
     out["zed_left"] = out["zed_right"] = z
     for short in THERMAL:
         base = nominal_thermal_lens(rig, short)
-        intr = list(base.intrinsics)
+        lensmodel, intr = base.intrinsics()
         k = 1.0 + rng.uniform(-0.005, 0.005)
         intr[0] *= k
         intr[1] *= k
         intr[2] += rng.uniform(-3, 3)
         intr[3] += rng.uniform(-3, 3)
-        out[short] = Lens(base.lensmodel, tuple(intr), base.imagersize)
+        out[short] = camera_model(lensmodel, intr, imagersize(base))
     return out
 
 
@@ -95,15 +96,15 @@ def perturbed(tree: FrameTree, rng: np.random.Generator, mm: float, deg: float) 
     return out
 
 
-def _project(lens: Lens, board: Board, T_cam_board: Pose) -> np.ndarray:
+def _project(lens, board: Board, T_cam_board: Pose) -> np.ndarray:
     p = T_cam_board.apply(board.corners() * 1000.0) / 1000.0
     if np.any(p[:, 2] <= 0.1):
         return np.full((board.n, 2), np.nan)
-    return lens.project(p)
+    return project(p, lens)
 
 
-def _board_ok(q: np.ndarray, lens: Lens, board: Board) -> bool:
-    W, H = lens.imagersize
+def _board_ok(q: np.ndarray, lens, board: Board) -> bool:
+    W, H = imagersize(lens)
     if not np.all(np.isfinite(q)):
         return False
     if np.any((q[:, 0] < MARGIN_PX) | (q[:, 0] > W - 1 - MARGIN_PX) | (q[:, 1] < MARGIN_PX) |
@@ -115,7 +116,7 @@ def _board_ok(q: np.ndarray, lens: Lens, board: Board) -> bool:
     return bool(d.min() >= MIN_SQUARE_PX)
 
 
-def sample_board_pose(rng: np.random.Generator, true_T: dict[str, Pose], lenses: dict[str, Lens], board: Board,
+def sample_board_pose(rng: np.random.Generator, true_T: dict[str, Pose], lenses: dict, board: Board,
                       max_tries: int = 2000) -> tuple[Pose, dict[str, np.ndarray]]:
     """A board pose in the rig frame (mm) seen whole by every camera, and its true corners per camera."""
     ref = true_T["thermal_left"]          # the narrowest view: aim the board through it
@@ -147,13 +148,13 @@ def sample_board_pose(rng: np.random.Generator, true_T: dict[str, Pose], lenses:
     raise RuntimeError(f"no board pose is seen whole by every camera in {max_tries} tries; use a smaller board")
 
 
-def _view(board: Board, lens: Lens, T_cam_board: Pose, corners: np.ndarray) -> BoardView:
+def _view(board: Board, lens, T_cam_board: Pose, corners: np.ndarray) -> BoardView:
     return BoardView(T_cam_board.R, T_cam_board.t / 1000.0, corners, False)
 
 
-def render_rgb(rng: np.random.Generator, lens: Lens, board: Board, view: BoardView) -> np.ndarray:
+def render_rgb(rng: np.random.Generator, lens, board: Board, view: BoardView) -> np.ndarray:
     """An 8-bit BGR image of a printed board (white/black squares, grey border) under a tinted light."""
-    W, H = lens.imagersize
+    W, H = imagersize(lens)
     diff = dataclasses.replace(level("easy"), board_gradient=0.0)
     look = Look(contrast_k=2.0, spread_m=0.0002, polarity=1.0, board_offset_k=0.0, blur_px=0.0,
                 reflection=None, occluded=False)
@@ -182,7 +183,7 @@ def render_rig_dataset(out_dir, n: int = 30, *, board=(10, 7), square: float = 0
     lenses = true_lenses(rig, rng, rgb_scale)
     true_T = perturbed(tree, rng, perturb_mm, perturb_deg)
     diff = level(difficulty)
-    sensors = {s: Sensor.make(rng, (lenses[s].imagersize[1], lenses[s].imagersize[0]), diff) for s in THERMAL}
+    sensors = {s: Sensor.make(rng, imagersize(lenses[s])[::-1], diff) for s in THERMAL}
     thermal_lag_ns = int(rng.uniform(1.0e6, 2.0e6))
     sets = []
     for k in range(n):
@@ -220,8 +221,9 @@ def render_rig_dataset(out_dir, n: int = 30, *, board=(10, 7), square: float = 0
             "rgb_scale": rgb_scale, "seed": seed, "difficulty": difficulty,
             "board": {"width": b.width, "height": b.height, "square_m": b.square_m},
             "perturbation": {"mm": perturb_mm, "deg": perturb_deg}, "rig_hash": rig.hash,
-            "cameras": {s: {"frame": CAMERAS[s], "lensmodel": lenses[s].lensmodel,
-                            "intrinsics": list(lenses[s].intrinsics), "imagersize": list(lenses[s].imagersize),
+            "cameras": {s: {"frame": CAMERAS[s], "lensmodel": lenses[s].intrinsics()[0],
+                            "intrinsics": lenses[s].intrinsics()[1].tolist(),
+                            "imagersize": list(imagersize(lenses[s])),
                             "T_rig_cam_true": pose_dict(true_T[s]), "T_rig_cam_cad": pose_dict(tree.camera(s)),
                             "rt_cam_rig_true_m": true_T[s].inverse().rt(metres=True).tolist(),
                             "rt_cam_rig_cad_m": tree.camera(s).inverse().rt(metres=True).tolist(),
@@ -234,11 +236,8 @@ def render_rig_dataset(out_dir, n: int = 30, *, board=(10, 7), square: float = 0
                      for st in sets]}
         (stage / "truth.json").write_text(json.dumps(truth, indent=1))
         (stage / "truth").mkdir()
-        import mrcal
         for s in CAMERA_FOLDERS:
-            m = mrcal.cameramodel(intrinsics=(lenses[s].lensmodel, lenses[s].intrinsics_array),
-                                  imagersize=np.array(lenses[s].imagersize),
-                                  extrinsics_rt_fromref=true_T[s].inverse().rt(metres=True))
+            m = camera_model(*lenses[s].intrinsics(), imagersize(lenses[s]), true_T[s].inverse().rt(metres=True))
             buf = io.StringIO()
             m.write(buf, note=f"true lens and extrinsics of {s} in the synthetic rig set (seed {seed})")
             (stage / "truth" / f"{s}.cameramodel").write_text(buf.getvalue())

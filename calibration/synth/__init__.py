@@ -6,6 +6,6 @@ counts), truth.cameramodel and truth.json; see docs/calibration-synthetic.md.
 from .board import Board
 from .dataset import render_dataset
 from .difficulty import DIFFICULTIES, LEVELS, Difficulty
-from .lens import Lens, nominal_thermal_lens
+from .lens import nominal_thermal_lens
 
-__all__ = ["render_dataset", "Board", "Lens", "nominal_thermal_lens", "DIFFICULTIES", "LEVELS", "Difficulty"]
+__all__ = ["render_dataset", "Board", "nominal_thermal_lens", "DIFFICULTIES", "LEVELS", "Difficulty"]

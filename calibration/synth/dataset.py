@@ -9,17 +9,19 @@ import cv2
 import numpy as np
 
 from platform_tools.rig import atomic
+from platform_tools.rig.cameras import imagersize
 from platform_tools.rig.progress import progress
 
 from .board import Board
 from .difficulty import Difficulty, level
-from .lens import Lens
+from .lens import as_cameramodel
 from .poses import sample_view
 from .render import render_image
 from .sensor import Sensor
 
 
-def default_lens(camera: str = "thermal_left", rig=None) -> Lens:
+def default_lens(camera: str = "thermal_left", rig=None):
+    """The nominal synthetic lens (an mrcal.cameramodel) of ``camera`` in the rig description."""
     from platform_tools.rig import load_rig
 
     from .lens import nominal_thermal_lens
@@ -35,7 +37,8 @@ def render_dataset(out_dir, n: int = 40, difficulty: str | Difficulty = "real", 
                    seed: int = 0, lens=None, *, camera: str = "thermal_left", rig=None,
                    show_progress: bool = True, only=None) -> dict:
     """Render ``n`` images of a ``board`` (W, H inner corners, ``square`` metres) through ``lens``
-    (default: the nominal thermal lens of ``camera`` in the rig description) into ``out_dir``,
+    (an mrcal.cameramodel, a .cameramodel path or a (lensmodel, intrinsics, (W, H)) tuple; default: the
+    nominal thermal lens of ``camera`` in the rig description) into ``out_dir``,
     replaced whole and atomically. ``difficulty``: a name (easy, real, hard) or a :class:`Difficulty`
     (e.g. one effect switched off, as bench/bench_corner_bias.py does). Returns the truth (also
     written to truth.json). ``only``: render just these image indices (each the same pixels as in
@@ -49,10 +52,11 @@ def render_dataset(out_dir, n: int = 40, difficulty: str | Difficulty = "real", 
         raise ValueError(f"n={n}: render at least one image")
     if not (square > 0):
         raise ValueError(f"square={square}: the square size must be positive (metres)")
-    lens = Lens.from_any(lens) if lens is not None else default_lens(camera, rig)
+    lens = as_cameramodel(lens) if lens is not None else default_lens(camera, rig)
     b = Board(W, H, float(square))
     rng = np.random.default_rng(seed)
-    sensor = Sensor.make(rng, (lens.imagersize[1], lens.imagersize[0]), diff)
+    W_img, H_img = imagersize(lens)
+    sensor = Sensor.make(rng, (H_img, W_img), diff)
     images = []
     out_dir = Path(out_dir)
     with atomic.OutputDir(out_dir) as stage:
@@ -73,13 +77,13 @@ def render_dataset(out_dir, n: int = 40, difficulty: str | Difficulty = "real", 
                            "visible": view.visible, "occluded": [int(i) for i in np.flatnonzero(occluded)],
                            "polarity": "cooled" if look.polarity < 0 else "heated",
                            "contrast_k": round(look.contrast_k, 3)})
-        truth = {"lensmodel": lens.lensmodel, "intrinsics": list(lens.intrinsics),
-                 "imagersize": list(lens.imagersize),
+        lensmodel, intrinsics = lens.intrinsics()
+        truth = {"lensmodel": lensmodel, "intrinsics": intrinsics.tolist(), "imagersize": [W_img, H_img],
                  "board": {"width": W, "height": H, "square_m": float(square)},
                  "difficulty": difficulty, "seed": seed, "images": images}
         (stage / "truth.json").write_text(json.dumps(truth, indent=1))
         buf = io.StringIO()
-        lens.cameramodel().write(buf, note=f"the exact lens the synthetic {difficulty} images (seed {seed}) "
+        lens.write(buf, note=f"the exact lens the synthetic {difficulty} images (seed {seed}) "
                                            f"were rendered through")
         (stage / "truth.cameramodel").write_text(buf.getvalue())
     return truth

@@ -15,11 +15,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from platform_tools.rig.cameras import imagersize
 from platform_tools.rig.frames import rotvec_to_matrix
 
 from .board import Board
 from .difficulty import Difficulty
-from .lens import Lens, max_valid_angle_rad, unproject
+from .lens import max_valid_angle_rad, project, unproject
 
 FULL_MARGIN_PX = 6.0       # a "fully visible" board keeps every corner this far inside the image
 MIN_PARTIAL_SHARE = 0.35   # a partial board keeps at least this share of its corners in view
@@ -37,11 +38,11 @@ class BoardView:
         return int(np.sum(np.isfinite(self.corners_px[:, 0])))
 
 
-def project_corners(lens: Lens, board: Board, R: np.ndarray, t: np.ndarray) -> np.ndarray:
+def project_corners(lens, board: Board, R: np.ndarray, t: np.ndarray) -> np.ndarray:
     """True pixel position of every corner (mrcal.project), NaN outside the image or the lens' field."""
     p = board.corners() @ R.T + t
-    q = lens.project(p)
-    W, H = lens.imagersize
+    q = project(p, lens)
+    W, H = imagersize(lens)
     angle = np.arctan2(np.hypot(p[:, 0], p[:, 1]), p[:, 2])
     ok = (angle < max_valid_angle_rad(lens)) & (q[:, 0] >= -0.5) & (q[:, 0] <= W - 0.5) & \
         (q[:, 1] >= -0.5) & (q[:, 1] <= H - 0.5)
@@ -79,10 +80,10 @@ def _target_pixel(rng: np.random.Generator, diff: Difficulty, W: int, H: int) ->
     return np.array([rng.uniform(0.5 - span, 0.5 + span) * W, rng.uniform(0.5 - span, 0.5 + span) * H]), False, False
 
 
-def sample_view(rng: np.random.Generator, lens: Lens, board: Board, diff: Difficulty,
+def sample_view(rng: np.random.Generator, lens, board: Board, diff: Difficulty,
                 max_tries: int = 400) -> BoardView:
-    W, H = lens.imagersize
-    f = lens.intrinsics[0]
+    W, H = imagersize(lens)
+    f = float(lens.intrinsics()[1][0])
     board_w = (board.width + 1) * board.square_m
     for _ in range(max_tries):
         target, edge, partial = _target_pixel(rng, diff, W, H)

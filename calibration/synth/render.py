@@ -11,9 +11,11 @@ from functools import lru_cache
 
 import numpy as np
 
+from platform_tools.rig.cameras import camera_model, imagersize
+
 from .board import Board
 from .difficulty import Difficulty
-from .lens import Lens, unproject
+from .lens import unproject
 from .poses import BoardView
 from .scene import AMBIENT_K, background, hand
 from .sensor import Sensor
@@ -21,10 +23,17 @@ from .sensor import Sensor
 SUPERSAMPLE = 4
 
 
+def ray_grid(lens, ss: int = SUPERSAMPLE) -> np.ndarray:
+    """Unit rays (H*ss, W*ss, 3) float32 of every sub-pixel centre of ``lens`` (an mrcal.cameramodel);
+    pixel (x, y) spans x +- 0.5. Cached by the lens' values (a set's images share one grid)."""
+    lm, intr = lens.intrinsics()
+    return _ray_grid(lm, tuple(float(x) for x in intr), imagersize(lens), ss)
+
+
 @lru_cache(maxsize=2)
-def ray_grid(lens: Lens, ss: int = SUPERSAMPLE) -> np.ndarray:
-    """Unit rays (H*ss, W*ss, 3) float32 of every sub-pixel centre; pixel (x, y) spans x +- 0.5."""
-    W, H = lens.imagersize
+def _ray_grid(lensmodel: str, intrinsics: tuple[float, ...], size: tuple[int, int], ss: int) -> np.ndarray:
+    lens = camera_model(lensmodel, intrinsics, size)
+    W, H = size
     off = (np.arange(ss) + 0.5) / ss - 0.5
     xs = (np.arange(W)[:, None] + off[None, :]).ravel()
     ys = (np.arange(H)[:, None] + off[None, :]).ravel()
@@ -59,11 +68,11 @@ class Look:
                     rng.random() < diff.occluder_prob)
 
 
-def board_layer(lens: Lens, board: Board, view: BoardView, look: Look, diff: Difficulty,
+def board_layer(lens, board: Board, view: BoardView, look: Look, diff: Difficulty,
                 ss: int = SUPERSAMPLE) -> tuple[np.ndarray, np.ndarray]:
     """(coverage, board temperature) per pixel: the area share of the pixel the board covers and the
     mean board temperature over that share (kelvin; ambient where coverage is 0)."""
-    W, H = lens.imagersize
+    W, H = imagersize(lens)
     rays = ray_grid(lens, ss)
     R = view.R.astype(np.float32)
     t = view.t.astype(np.float32)
@@ -93,10 +102,10 @@ def board_layer(lens: Lens, board: Board, view: BoardView, look: Look, diff: Dif
     return cov, AMBIENT_K + mean
 
 
-def render_image(rng: np.random.Generator, lens: Lens, board: Board, view: BoardView, diff: Difficulty,
+def render_image(rng: np.random.Generator, lens, board: Board, view: BoardView, diff: Difficulty,
                  sensor: Sensor) -> tuple[np.ndarray, np.ndarray, Look]:
     """One uint16 frame and the per-corner occlusion flags (True where a hand covers the corner)."""
-    W, H = lens.imagersize
+    W, H = imagersize(lens)
     look = Look.draw(rng, diff, board)
     bg = background(rng, (H, W), diff.clutter)
     cov, board_k = board_layer(lens, board, view, look, diff)

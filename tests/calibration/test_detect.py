@@ -9,7 +9,7 @@ import mrcal
 import numpy as np
 import pytest
 
-from calibration.corners_io import BoardCorners, read_corners, write_corners
+from calibration.formats.corners_vnl import BoardCorners, read_corners, write_corners
 from calibration.detect import detect_corners
 
 

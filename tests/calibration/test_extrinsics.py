@@ -149,8 +149,8 @@ def test_step_placements_match_the_extrinsics(tmp_path, moved_rig):
             walk(ch, T)
     walk(imported, Pose.identity())
     tree = cad_frames(moved_rig)
-    from cad.vendor.boson import BosonCore
-    from cad.vendor.zed_x import ZedX
+    from cad.bought.boson import BosonCore
+    from cad.bought.zed_x import ZedX
     s = moved_rig.desc.sensors
     zed_local = ZedX.from_rig(moved_rig, s.zed_x.part).optical_frames()
     core_local = BosonCore.from_rig(moved_rig, s.thermal.part, s.thermal.lens).optical_frames()["optical"]

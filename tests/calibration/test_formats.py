@@ -6,8 +6,11 @@ import mrcal
 import numpy as np
 import yaml
 
+from platform_tools.rig.cameras import camera_model
+
 from calibration import formats
-from calibration.intrinsics import kannala_brandt as kb
+from calibration.formats.conversions import projector
+from calibration.lens import kannala_brandt as kb
 from calibration.intrinsics.synthetic_corners import fisheye_truth
 
 SIZE = (640, 512)
@@ -20,7 +23,7 @@ def rays(n=200, seed=0):
 
 def test_opencv8_to_ros_rational_polynomial_is_exact_and_projects_like_mrcal(tmp_path):
     lm, intr = fisheye_truth(408.3, SIZE)
-    lens = formats.Lens(lm, intr, SIZE)
+    lens = camera_model(lm, intr, SIZE)
     rep = formats.nearest_for_ros(lens)
     assert rep.family == "rational_polynomial" and rep.exact
     doc = yaml.safe_load(formats.ros_camera_info(rep, SIZE, camera_name="thermal"))
@@ -42,7 +45,7 @@ def test_opencv8_to_ros_rational_polynomial_is_exact_and_projects_like_mrcal(tmp
 
 def test_kannala_brandt_exports_exactly_as_fisheye_and_equidistant(tmp_path):
     p = np.array([405.0, 404.0, 321.0, 255.0, 0.02, -0.004, 0.001, -0.0002])
-    lens = formats.Lens(kb.NAME, p, SIZE)
+    lens = kb.KannalaBrandt(p, SIZE)
     rep = formats.nearest_for_ros(lens)
     assert rep.family == "equidistant" and rep.exact
     f = tmp_path / "c.yaml"
@@ -62,16 +65,17 @@ def test_kannala_brandt_exports_exactly_as_fisheye_and_equidistant(tmp_path):
 def test_splined_has_no_ros_equivalent_so_the_nearest_fit_is_reported():
     lm, intr = fisheye_truth(408.3, SIZE)
     sp = "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=12_Ny=10_fov_x_deg=100"
-    from calibration.intrinsics.lensfit import fit_lensmodel, mrcal_unprojector
+    from calibration.lens.fit import fit_lensmodel, mrcal_unprojector
     fit = fit_lensmodel(mrcal_unprojector(lm, intr), SIZE, sp, np.r_[intr[:4]], fix_core=False)
-    lens = formats.Lens(sp, fit.intrinsics, SIZE)
+    lens = camera_model(sp, fit.intrinsics, SIZE)
     rep = formats.nearest_for_ros(lens)
     assert not rep.exact and rep.fit.rms_px < 0.5
     text = formats.ros_camera_info(rep, SIZE, camera_name="thermal")
     assert "no" in text.splitlines()[0] and "equivalent" in text.splitlines()[0]
     # the fit really is close: project through the representation and compare with the splined lens
     v = mrcal.unproject(rays(), sp, fit.intrinsics)
-    lens2 = formats.Lens({"rational_polynomial": "LENSMODEL_OPENCV8"}.get(rep.family, kb.NAME),
-                         np.r_[rep.K[0, 0], rep.K[1, 1], rep.K[0, 2], rep.K[1, 2], rep.D], SIZE)
-    d = np.linalg.norm(lens2.projector()(v) - mrcal.project(v, sp, fit.intrinsics), axis=-1)
+    p2 = np.r_[rep.K[0, 0], rep.K[1, 1], rep.K[0, 2], rep.K[1, 2], rep.D]
+    lens2 = camera_model("LENSMODEL_OPENCV8", p2, SIZE) if rep.family == "rational_polynomial" else \
+        kb.KannalaBrandt(p2, SIZE)
+    d = np.linalg.norm(projector(lens2)(v) - mrcal.project(v, sp, fit.intrinsics), axis=-1)
     assert np.sqrt(np.mean(d ** 2)) < 2 * rep.fit.rms_px + 0.05

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from calibration.intrinsics import mrcal_solver
-from calibration.intrinsics.lensfit import imager_grid
-from calibration.intrinsics.outputs import build
+from calibration.lens.fit import imager_grid
+from calibration.thermal.outputs import build
 from calibration.intrinsics.synthetic_corners import fisheye_truth, simulate
 from calibration.report import verdict as vd
 from calibration.report.validity import validity as trust_map
 from calibration.report.verdict import judge
-from calibration.validate import central_mask, compare
+from calibration.lens.compare import central_mask, compare
 
 SIZE = (640, 512)
 REGIONS = ["top-left corner", "top edge", "top-right corner", "left edge", "centre", "right edge",
@@ -191,10 +191,10 @@ def test_cross_validation_grades_uncovered_corners(covered):
     good = build(sol, camera_name="thermal", rig_hash="0" * 40, corners_vnl="# filename x y level\n")
     assert good.verdict.grade == "trusted" and good.verdict.trustworthy, good.verdict.headline
     assert good.summary["validity"]["trusted_share"] > 0.99
-    # the halves' largest disagreement (at an image corner) is 0.33-0.55 px on this set depending on
-    # what ran before in the process: the unregularised OPENCV8 solve's near-degenerate rational terms
-    # amplify rounding differences (docs/calibration.md, known limits); the grade above is what counts
-    assert good.summary["cross_validation"]["max_px"] < 1.0
+    # the halves' largest disagreement (at an image corner): 0.25 px on this set, the same in every run
+    # since the OPENCV8 seed is a linear fit (calibration/lens/radial.py); an iterative seed fit varied it
+    # 0.33-0.55 px with what ran before in the process
+    assert good.summary["cross_validation"]["max_px"] < 0.35
     assert 'class="verdict ok"' in good.files["report.html"]
 
     holes = _without_image_corners(covered.observations, 130.0)

@@ -17,7 +17,7 @@ def truth_problem():
     # near-equal lenses, where a first-order answer means little
     from calibration.synth.dataset import default_lens
     lens = default_lens()
-    lm, intr = lens.lensmodel, lens.intrinsics_array
+    lm, intr = lens.intrinsics()
     s = simulate(lm, intr, SIZE, n=16, noise_px=0.0, seed=5)
     oi = problem_at_truth(lm, intr, s.rt_cam_board, s.observations.corners, s.observations.board,
                           s.observations.square_m, SIZE)
@@ -49,7 +49,7 @@ def test_matches_a_nonlinear_resolve(truth_problem):
     matters, as projection over the central 80% of the image (the rational model's terms can trade
     against each other along a valley of near-equal fits, so the terms themselves are not compared)."""
     from calibration.intrinsics.sensitivity import projection_shift
-    from calibration.validate import central_mask, compare
+    from calibration.lens.compare import central_mask, compare
     lm, intr, s, oi = truth_problem
     rng = np.random.default_rng(1)
     seen = s.observations.seen()
@@ -82,7 +82,7 @@ def test_refuses_a_problem_it_does_not_handle(truth_problem):
 
 def test_projection_shift_is_zero_for_a_rotation_and_tracks_a_focal_change(truth_problem):
     from calibration.intrinsics.sensitivity import projection_shift
-    from calibration.validate import central_mask, compare
+    from calibration.lens.compare import central_mask, compare
     lm, intr, s, oi = truth_problem
     bumped = intr.copy()
     bumped[0] += 0.05

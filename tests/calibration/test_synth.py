@@ -11,8 +11,9 @@ import pytest
 
 from calibration.synth import LEVELS, render_dataset
 from calibration.synth.board import Board
-from calibration.synth.lens import Lens, nominal_thermal_lens, unproject, unproject_radial
+from calibration.synth.lens import nominal_thermal_lens, unproject, unproject_radial
 from platform_tools.rig import load_rig
+from platform_tools.rig.cameras import camera_model, imagersize
 
 
 @pytest.fixture(scope="module")
@@ -23,11 +24,12 @@ def lens():
 def test_lens_follows_the_rig_description(lens):
     rig = load_rig()
     spec = rig.camera_model("boson_640_4p9mm")
-    assert lens.lensmodel == "LENSMODEL_OPENCV8"
-    assert lens.imagersize == (spec.width_px, spec.height_px)
-    assert lens.intrinsics[0] == pytest.approx(rig.focal_px(spec))
+    lensmodel, intrinsics = lens.intrinsics()
+    assert isinstance(lens, mrcal.cameramodel) and lensmodel == "LENSMODEL_OPENCV8"
+    assert imagersize(lens) == (spec.width_px, spec.height_px)
+    assert intrinsics[0] == pytest.approx(rig.focal_px(spec))
     # the horizontal field of view through the principal point is the rig's HFoV (within 1 deg)
-    cy = lens.intrinsics[3]
+    cy = intrinsics[3]
     v = unproject(np.array([[-0.5, cy], [spec.width_px - 0.5, cy]]), lens)
     hfov = math.degrees(math.atan2(-v[0, 0], v[0, 2]) + math.atan2(v[1, 0], v[1, 2]))
     assert hfov == pytest.approx(spec.hfov_deg.value, abs=1.0)
@@ -36,7 +38,8 @@ def test_lens_follows_the_rig_description(lens):
 def test_lens_follows_a_changed_rig():
     rig = load_rig(overrides=("camera_models.boson_640_4p9mm.hfov_deg.value=90",))
     L = nominal_thermal_lens(rig)
-    v = unproject(np.array([[-0.5, L.intrinsics[3]], [639.5, L.intrinsics[3]]]), L)
+    cy = L.intrinsics()[1][3]
+    v = unproject(np.array([[-0.5, cy], [639.5, cy]]), L)
     assert math.degrees(math.atan2(-v[0, 0], v[0, 2]) + math.atan2(v[1, 0], v[1, 2])) == pytest.approx(90, abs=1.0)
 
 
@@ -44,10 +47,10 @@ def test_fast_unprojection_is_mrcals(lens):
     rng = np.random.default_rng(3)
     q = rng.uniform([-0.5, -0.5], [639.5, 511.5], size=(500, 2))
     v = unproject_radial(q, lens)
-    ref = mrcal.unproject(q, lens.lensmodel, lens.intrinsics_array)
+    ref = mrcal.unproject(q, *lens.intrinsics())
     ref /= np.linalg.norm(ref, axis=1, keepdims=True)
     assert np.abs(v - ref).max() < 1e-9
-    assert np.abs(mrcal.project(v, lens.lensmodel, lens.intrinsics_array) - q).max() < 1e-8
+    assert np.abs(mrcal.project(v, *lens.intrinsics()) - q).max() < 1e-8
 
 
 def test_board_pattern_is_a_checker_with_heat_spread():
@@ -121,9 +124,15 @@ def test_partial_boards_in_real_sets(tmp_path):
 
 
 def test_custom_lens_is_the_truth(tmp_path):
-    lens = Lens("LENSMODEL_OPENCV8", (400.0, 400.0, 320.0, 256.0, -0.05, 0.01, 1e-4, -1e-4, 0, 0, 0, 0), (640, 512))
+    intr = (400.0, 400.0, 320.0, 256.0, -0.05, 0.01, 1e-4, -1e-4, 0, 0, 0, 0)
+    lens = camera_model("LENSMODEL_OPENCV8", intr, (640, 512))
     truth = render_dataset(tmp_path / "s", n=1, difficulty="easy", seed=1, lens=lens, show_progress=False)
-    assert truth["intrinsics"] == list(lens.intrinsics)
+    assert truth["intrinsics"] == list(intr)
+    assert mrcal.cameramodel(str(tmp_path / "s" / "truth.cameramodel")).intrinsics()[1].tolist() == list(intr)
+    # the same lens as a (lensmodel, intrinsics, imagersize) tuple renders the same truth
+    again = render_dataset(tmp_path / "t", n=1, difficulty="easy", seed=1, lens=("LENSMODEL_OPENCV8", intr, (640, 512)),
+                           show_progress=False)
+    assert again == truth
 
 
 @pytest.mark.parametrize("args, message", [

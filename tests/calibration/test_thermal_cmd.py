@@ -57,13 +57,15 @@ def test_calibrate_validate_end_to_end_and_wrong_board(synth_set, tmp_path, caps
     out = tmp_path / "out"
     code, stdout, err = run(capsys, "thermal", "--images", str(src), "--board", "10x7", "--square", "0.04",
                             "--out", str(out), "--json", "-q")
+    assert stdout, (code, err)
     summary = json.loads(stdout)
-    assert code in (0, 1), err
+    # 12 easy images leave the bottom-right image corner without a board: solved, but not trusted
+    assert code == 1 and "calibration not trusted" in err, err
     grade = summary["verdict"]["grade"]
-    assert grade in ("trusted", "trusted-within-region", "not-trusted")
-    assert summary["verdict"]["trustworthy"] == (grade != "not-trusted")
-    assert (code == 0) == summary["verdict"]["trustworthy"]
-    assert 0 <= summary["verdict"]["trusted_share"] <= 1
+    assert grade == "not-trusted" and summary["verdict"]["trustworthy"] is False
+    assert "the bottom-right corner has no data" in summary["verdict"]["headline"]
+    assert 0.4 <= summary["verdict"]["trusted_share"] < 0.8          # measured 0.55
+    assert summary["rms_px"] < 0.1                                    # corners: 0.013 px RMS reprojection
     for name in ("thermal.cameramodel", "thermal_opencv.yaml", "thermal_camera_info.yaml",
                  "kalibr_camchain.yaml", "corners.vnl", "report.html"):
         assert (out / name).is_file(), name
@@ -77,13 +79,17 @@ def test_calibrate_validate_end_to_end_and_wrong_board(synth_set, tmp_path, caps
 
     code, stdout, err = run(capsys, "validate", str(out / "thermal.cameramodel"), "--truth", str(src), "--json")
     v = json.loads(stdout)
-    assert code == (0 if v["within_targets"] else 1)
-    # the verdict must never call a calibration trusted (over the whole image) that is far from the
-    # truth, nor trusted within its region that is far from the truth inside that region
-    if v["rms_px"] > 0.3:
-        assert grade != "trusted", (v, summary["verdict"])
-    if _rms_in_valid_region(m, mrcal.cameramodel(str(src / "truth.cameramodel"))) > 0.3:
-        assert grade == "not-trusted", (v, summary["verdict"])
+    # the figures against the truth (measured: 2.25 px RMS over the whole image, where the corners are
+    # extrapolation; 0.10 px over the central 80%; 0.025 px inside the valid-intrinsics region): a wrong
+    # model (a wrong lens, focal length or board) is pixels off in the centre and fails every bound
+    assert code == 1 and v["within_targets"] is False
+    assert v["central80_rms_px"] < 0.2, v
+    assert v["rms_px"] < 5.0, v
+    assert max(abs(e) for e in v["focal_error_px"] + v["principal_point_error_px"]) < 0.5, v
+    truth = mrcal.cameramodel(str(src / "truth.cameramodel"))
+    assert _rms_in_valid_region(m, truth) < 0.1
+    # and the verdict never calls a model trusted that is far from the truth
+    assert grade != "trusted" or v["rms_px"] <= 0.3
 
     # the wrong board size: nothing found, exit 1, the previous output untouched
     before = sorted(p.name for p in out.iterdir())
@@ -96,7 +102,7 @@ def test_calibrate_validate_end_to_end_and_wrong_board(synth_set, tmp_path, caps
 def _rms_in_valid_region(model, truth) -> float:
     """RMS projection difference against the truth inside the model's valid-intrinsics region (the
     rotation fitted over the central 80%: a model used within its region is aligned there)."""
-    from calibration.validate import compare_models
+    from calibration.lens.compare import compare_models
     c = compare_models(model, truth, grid_width=32, fit_fraction=0.8)
     region = model.valid_intrinsics_region()
     if region is None or len(region) < 4:
@@ -118,7 +124,7 @@ def test_exit_code_follows_the_grade():
 @pytest.fixture
 def graded(monkeypatch):
     """calibrate thermal with its verdict forced to a grade (the solve and the outputs are real)."""
-    from calibration.intrinsics import outputs
+    from calibration.thermal import outputs
     from calibration.report.verdict import Verdict
     forced = {}
 

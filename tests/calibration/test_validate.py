@@ -6,7 +6,7 @@ import mrcal
 import numpy as np
 
 from calibration.intrinsics.synthetic_corners import fisheye_truth
-from calibration.validate import compare, compare_models
+from calibration.lens.compare import compare, compare_models
 
 SIZE = (640, 512)
 

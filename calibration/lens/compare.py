@@ -15,7 +15,7 @@ from typing import Callable
 
 import numpy as np
 
-from .intrinsics.lensfit import imager_grid
+from calibration.lens.fit import imager_grid
 
 Project = Callable[[np.ndarray], np.ndarray]      # (..., 3) rays -> (..., 2) pixels
 Unproject = Callable[[np.ndarray], np.ndarray]    # (..., 2) pixels -> (..., 3) rays

@@ -6,13 +6,30 @@
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
-from .lensfit import LensFit, imager_grid
+from calibration.lens.fit import LensFit, imager_grid
 
 NAME = "KANNALA_BRANDT"
+
+
+@dataclass(frozen=True)
+class KannalaBrandt:
+    """OpenCV's fisheye result (``calibrate thermal --solver opencv``), which an ``mrcal.cameramodel``
+    cannot hold: the one camera value of the project besides mrcal's, for this case only. It answers the
+    two questions the format writers ask of a camera as a cameramodel does: ``intrinsics()`` ->
+    (:data:`NAME`, params (8,): fx fy cx cy px, k1..k4) and ``imagersize()`` -> (W, H) px."""
+    params: np.ndarray
+    size: tuple[int, int]
+
+    def intrinsics(self) -> tuple[str, np.ndarray]:
+        return NAME, np.array(self.params, dtype=float)
+
+    def imagersize(self) -> tuple[int, int]:
+        return self.size
 
 
 def project(v: np.ndarray, params: np.ndarray) -> np.ndarray:

@@ -7,14 +7,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import formats
-from ..report import analysis, html
-from ..report.validity import validity
-from ..report.verdict import Verdict, judge
-from . import crossval
-from . import kannala_brandt as kb
-from .lensfit import imager_grid
-from .mrcal_solver import Solution
+from platform_tools.rig.cameras import camera_model
+
+from calibration import formats
+from calibration.report import analysis, html
+from calibration.report.validity import validity
+from calibration.report.verdict import Verdict, judge
+from calibration.intrinsics import crossval
+from calibration.lens import kannala_brandt as kb
+from calibration.lens.fit import imager_grid
+from calibration.intrinsics.mrcal_solver import Solution
 
 
 @dataclass
@@ -41,7 +43,8 @@ def _cameramodel_text(model, note: str):
 
 def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: str,
           cross_validate: bool = True) -> Outputs:
-    lens = formats.Lens(solution.lensmodel, solution.intrinsics, solution.imagersize)
+    lens = kb.KannalaBrandt(solution.intrinsics, solution.imagersize) if solution.lensmodel == kb.NAME else \
+        camera_model(solution.lensmodel, solution.intrinsics, solution.imagersize)
     ros = formats.nearest_for_ros(lens)
     kal = formats.nearest_kalibr(lens)
     rational = formats.representation(lens, "rational_polynomial") if solution.lensmodel == kb.NAME else None

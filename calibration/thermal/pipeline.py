@@ -1,0 +1,113 @@
+"""The thermal intrinsics pipeline behind ``calibrate thermal``: images -> the board's corners in each
+(and corners.vnl) -> a solved lens (mrcal, or OpenCV's fisheye) -> every output file and the verdict
+(:mod:`.outputs`).
+
+Bad input raises :class:`~platform_tools.rig.conventions.UserError` (exit 2) before anything is solved;
+data that cannot be solved (no board found, too few images) raises
+:class:`~platform_tools.rig.conventions.CheckFailed` (exit 1). Nothing here writes a file.
+"""
+from __future__ import annotations
+
+import logging
+
+from platform_tools.rig.conventions import CheckFailed, UserError
+
+from calibration.intrinsics.observations import BoardObservations
+from calibration.intrinsics.quiet import quiet_stderr
+from calibration.thermal.outputs import Outputs, build
+
+log = logging.getLogger("calibration.thermal")
+
+
+def check_lens_model(lens_model: str | None, imagersize: tuple[int, int]) -> None:
+    """A bad ``--lens-model`` name is bad input before any work is done (the field of view does not
+    decide whether a name is valid: 100 deg stands in for it)."""
+    if lens_model is None:
+        return
+    from calibration.intrinsics.lensmodels import LensModelError, resolve
+    try:
+        resolve(lens_model, imagersize, 100.0)
+    except LensModelError as exc:
+        raise UserError(str(exc)) from None
+
+
+def detect(images: str, board: tuple[int, int], square_m: float) -> tuple[BoardObservations, str]:
+    """Detection over the images (a folder or a glob): (observations, corners.vnl text). Corrupt files
+    are bad input; saturated or blank images are skipped and named (all of them unusable is bad input
+    too). ``board``: inner corners (W, H); ``square_m``: the square size in metres."""
+    from calibration.detect import ImageError, detect_files, list_images
+    from calibration.formats.corners_vnl import BoardCorners, format_corners
+    from calibration.intrinsics.observations import from_detections
+    try:
+        files = list_images(images)
+    except ImageError as exc:
+        raise UserError(f"--images {exc}") from None
+    results = detect_files(files, board, strict=False)
+    bad = [r for r in results if r.detection is None]
+    # ImageError reads "<path>: <what is wrong>"; judge the second part only
+    what = {id(r): r.error[len(str(r.path)):] if r.error.startswith(str(r.path)) else r.error for r in bad}
+    corrupt = [r for r in bad if "saturated" not in what[id(r)] and "same value" not in what[id(r)]]
+    if corrupt:
+        raise UserError(f"{corrupt[0].error}; remove it (and {len(corrupt) - 1} other such file(s))"
+                        if len(corrupt) > 1 else f"{corrupt[0].error}; remove it or pass --images a glob "
+                                                 f"that leaves it out")
+    good = [r for r in results if r.detection is not None]
+    if not good:
+        raise UserError(f"--images {images}: none of the {len(results)} images is usable: {bad[0].error}")
+    for r in bad:
+        log.warning("skipped %s", r.error)
+    sizes = {r.imagersize for r in good}
+    if len(sizes) > 1:
+        raise UserError(f"--images {images}: images of different sizes {sorted(sizes)}; one camera at a time")
+    imagersize = sizes.pop()
+    names = [r.path.name for r in good]
+    dets = [r.detection.corners if r.detection.detected else None for r in good]
+    wts = [r.detection.weight for r in good]
+    obs = from_detections(names, dets, board, square_m, imagersize, wts)
+    obs.missed.extend(r.path.name for r in bad)
+    rows = [BoardCorners(r.path.name, r.detection.corners if r.detection.detected else None,
+                         r.detection.level if r.detection.detected else None) for r in good]
+    rows += [BoardCorners(r.path.name, None, None) for r in bad]
+    if obs.n == 0:
+        reasons = sorted({r.detection.reason for r in good if r.detection.reason})
+        raise CheckFailed(f"--images {images}: no {board[0]}x{board[1]} board found in any of {len(results)} "
+                          f"images ({'; '.join(reasons[:2]) or 'no detection'}); check --board (inner corners "
+                          f"across x down) and that the board is warmer or cooler than the background")
+    return obs, format_corners(rows)
+
+
+def solve(obs: BoardObservations, *, solver: str, lens_model: str | None, focal_px: float):
+    """The lens from the observations: ``solver`` "mrcal" (``lens_model`` a name lensmodels.resolve
+    accepts, None for OPENCV8) or "opencv" (cv2.fisheye); ``focal_px`` the nominal focal length, the seed.
+    Returns an :class:`~calibration.intrinsics.mrcal_solver.Solution`."""
+    from calibration.intrinsics import SolveError, mrcal_solver, opencv_solver
+    from calibration.intrinsics.lensmodels import LensModelError
+    try:
+        if solver == "opencv":
+            if lens_model is not None:
+                raise UserError("--lens-model applies to --solver mrcal only (OpenCV's fisheye is Kannala-Brandt)")
+            return opencv_solver.solve(obs, focal_px=focal_px)
+        return mrcal_solver.solve(obs, lensmodel=lens_model, focal_px=focal_px)
+    except LensModelError as exc:
+        raise UserError(str(exc)) from None
+    except SolveError as exc:
+        raise CheckFailed(str(exc)) from None
+
+
+def calibrate(images: str, board: tuple[int, int], square_m: float, *, solver: str, lens_model: str | None,
+              focal_px: float, expected_size: tuple[int, int], camera_name: str, rig_hash: str,
+              show_solver_output: bool = False):
+    """The whole pipeline: (the observations detected, the solution, its
+    :class:`~calibration.thermal.outputs.Outputs`; the solution holds the observations it kept after
+    rejecting images). ``expected_size``:
+    the rig description's thermal imager (W, H) px, warned about when the images differ;
+    ``show_solver_output``: let mrcal's C-level progress lines through to stderr."""
+    check_lens_model(lens_model, expected_size)
+    obs, corners_text = detect(images, board, square_m)
+    if obs.imagersize != tuple(expected_size):
+        log.warning("images are %dx%d, the rig description's thermal camera is %dx%d",
+                    *obs.imagersize, *expected_size)
+    with quiet_stderr(enabled=not show_solver_output):
+        solution = solve(obs, solver=solver, lens_model=lens_model, focal_px=focal_px)
+        out: Outputs = build(solution, camera_name=camera_name, rig_hash=rig_hash, corners_vnl=corners_text)
+    return obs, solution, out
