@@ -3,7 +3,7 @@
 #   make test   set up what is missing, then run the test suite
 PY := .venv/bin/python
 
-.PHONY: demo test bootstrap clean
+.PHONY: demo test test-fast bootstrap clean
 bootstrap:
 	@./bootstrap.sh
 
@@ -14,6 +14,12 @@ demo: bootstrap
 test: bootstrap
 	@$(PY) -m pytest $(PYTEST_ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "make test: pytest collected no tests" >&2; fi; \
+	exit $$rc
+
+# the quick loop while developing (under 90 s on 2 cores): every test not marked slow
+test-fast: bootstrap
+	@$(PY) -m pytest -q -m "not slow" $(PYTEST_ARGS); rc=$$?; \
+	if [ $$rc -eq 5 ]; then echo "make test-fast: pytest collected no tests" >&2; fi; \
 	exit $$rc
 
 clean:

@@ -42,6 +42,7 @@ def test_unknown_command_is_usage_error(tool, capsys):
     assert exit_info.value.code == 2
 
 
+@pytest.mark.slow
 def test_console_scripts_run(platform_tools, calibrate):
     assert platform_tools("--help").returncode == 0
     assert calibrate("--help").returncode == 0

@@ -18,6 +18,7 @@ def project():
 
 
 # ----------------------------------------------------------------------------- the project obeys every rule
+@pytest.mark.slow
 def test_every_module_has_a_room(project):
     assert len(project) > 100          # the scan found the project, not an empty folder
     assert rules.unassigned(project) == []

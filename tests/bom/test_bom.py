@@ -20,6 +20,7 @@ def tree():
     return assembly_tree(build(load_rig()))
 
 
+@pytest.mark.slow
 def test_quantities_come_from_the_assembly(bom_default, tree):
     rows = read_bom(bom_default)
     for key, count in tree["counts"].items():
@@ -57,6 +58,7 @@ def test_md_and_html_group_by_category(bom_default):
     assert 'id="made-parts"' in html and "fits" in html
 
 
+@pytest.mark.slow
 def test_bom_follows_the_rig(bom_default, bom_changed):
     a, b = read_bom(bom_default), read_bom(bom_changed)
     assert float(a["handle"]["quantity"]) == 3 and float(b["handle"]["quantity"]) == 1
@@ -88,6 +90,7 @@ def _written_filament(d):
     d["parts"]["petg_filament"]["supply"]["quantity"] = 1000
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("edit, expected", [
     (lambda d: d["parts"]["zed_x"].pop("price"), "parts.zed_x.price: is missing"),
     (lambda d: d["parts"]["zed_x"]["price"].update(currency="US$"), "parts.zed_x.price.currency: got 'US$'"),

@@ -35,6 +35,7 @@ def test_info_json_and_table(cli, pair, tmp_path):
     assert code == 0 and str(LEFT) in out and str(RIGHT) in out and "sync_mode" in out
 
 
+@pytest.mark.slow
 def test_info_reports_a_dead_camera_and_the_live_one(cli, pair):
     pair[0].faults = parse_faults("stall")
     code, out, err = cli("boson-info", *RIG_SERIALS, *FAST, "--json")
@@ -88,6 +89,7 @@ def test_raw_needs_one_camera(cli, pair):
     assert code == 2 and "one camera" in err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cmd", ["boson-config", "boson-info", "boson-ffc", "boson-restore-defaults",
                                  "boson-raw", "boson-emulator"])
 def test_help(cmd):
@@ -103,6 +105,7 @@ def _start_emulator(tmp_path, *extra):
     return proc, by_id, lines
 
 
+@pytest.mark.slow
 def test_emulator_process_serves_real_clients(tmp_path):
     proc, by_id, lines = _start_emulator(tmp_path, "--serial", str(LEFT), "--serial", str(RIGHT))
     try:
@@ -124,6 +127,7 @@ def test_emulator_process_serves_real_clients(tmp_path):
     assert proc.returncode == 0 and not list(by_id.glob("usb-FLIR_Boson_*"))
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(os.geteuid() != 0, reason="needs root to drop to an unprivileged user")
 def test_permission_denied_on_the_port(tmp_path):
     proc, by_id, lines = _start_emulator(tmp_path, "--serial", str(LEFT))
@@ -143,6 +147,7 @@ def test_permission_denied_on_the_port(tmp_path):
         proc.wait(timeout=10)
 
 
+@pytest.mark.slow
 def test_emulator_session_writes_result_and_log(tmp_path):
     out = tmp_path / "session"
     r = subprocess.run(PT + ["boson-emulator", "--serial", str(LEFT), "--serial", str(RIGHT), "--trigger",

@@ -9,6 +9,7 @@ from cad.assembly import Assembly
 from cad.geom import Bounds, box
 
 
+@pytest.mark.slow
 def test_every_check_passes_on_the_default_design(results):
     failed = {n: r.details[:5] for n, r in results.items() if not r.ok}
     assert not failed
@@ -34,6 +35,7 @@ def _with_node_moved(asm, name, dx=0.0, dy=0.0, dz=0.0):
     return Assembly(asm.rig, asm.layout, nodes, asm.cache)
 
 
+@pytest.mark.slow
 def test_a_real_clash_is_found(asm):
     lay = asm.layout
     # lift the fuse into the computer
@@ -43,6 +45,7 @@ def test_a_real_clash_is_found(asm):
     assert any("blade_fuse" in d and "jetson_agx_orin" in d for d in r.details)
 
 
+@pytest.mark.slow
 def test_an_insert_in_the_wrong_place_fails_its_allowance(asm):
     moved = _with_node_moved(asm, "insert_thermal_mount_0", dz=1.5)  # pushed deeper than its hole
     r = checks.check_interference(moved)

@@ -20,6 +20,7 @@ def exported(asm, tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_step_round_trip(asm, exported):
     imported = cq.Assembly.importStep(str(exported / "rig_assembly.step"))
     got = {name: sub for name, sub in imported.traverse() if sub.obj is not None}
@@ -31,6 +32,7 @@ def test_step_round_trip(asm, exported):
         assert sub.obj.Volume() == pytest.approx(n.local_shape(asm.cache).Volume(), rel=1e-4), n.name
 
 
+@pytest.mark.slow
 def test_printed_parts_exported_on_the_bed(asm, exported):
     bed = asm.rig.desc.printing.printer.bed_mm
     for pid, n in asm.printed().items():
@@ -56,6 +58,7 @@ def run(*args, cwd=REPO):
     return subprocess.run([sys.executable, "cad/build.py", *args], cwd=cwd, capture_output=True, text=True)
 
 
+@pytest.mark.slow
 def test_bad_input_is_one_line_and_leaves_nothing(tmp_path):
     out = tmp_path / "out"
     for args, needle in [(("export", "DXF", "--out", str(out)), "unknown export format"),
@@ -68,6 +71,7 @@ def test_bad_input_is_one_line_and_leaves_nothing(tmp_path):
     assert not out.exists() and list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_unwritable_output_folder(tmp_path):
     target = tmp_path / "file"
     target.write_text("x")
@@ -75,6 +79,7 @@ def test_unwritable_output_folder(tmp_path):
     assert r.returncode == 2 and "Traceback" not in r.stderr and str(target) in r.stderr
 
 
+@pytest.mark.slow
 def test_check_fails_with_the_constraint_named(tmp_path):
     report = tmp_path / "report.txt"
     r = run("check", "--set", "sensors.thermal.baseline_mm=40", "--report", str(report))
@@ -82,6 +87,7 @@ def test_check_fails_with_the_constraint_named(tmp_path):
     assert "sensors.thermal.baseline_mm" in report.read_text() and "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_params_json_has_resolved_values():
     import json
     r = run("params", "--json", "--set", "enclosure.wall_mm=3")

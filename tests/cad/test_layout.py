@@ -55,6 +55,7 @@ def test_heat_sink_volume_matches_its_drawing(rig, asm):
     assert vol == pytest.approx(sleeve + fins + block - holes, rel=0.01)
 
 
+@pytest.mark.slow
 def test_moving_the_thermal_pair_moves_its_mount_window_and_frame(rig, asm):
     moved_rig = load_rig(overrides=["sensors.thermal.pose.xyz_mm=[0,0,-52]"])
     asm2 = build(moved_rig)

@@ -31,6 +31,7 @@ def sha(p):
     return hashlib.sha256(p.read_bytes()).hexdigest()
 
 
+@pytest.mark.slow
 def test_truncated_mcap_is_named_and_recovered_on_request(platform_tools, sim, tmp_path):
     rec = tmp_path / "cut"
     rec.mkdir()
@@ -52,6 +53,7 @@ def test_truncated_mcap_is_named_and_recovered_on_request(platform_tools, sim, t
     assert r.returncode == 0, r.stderr
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("drop, words", [
     (("thermal_left", "thermal_right"), ["no thermal_left", "/thermal/left/image_raw"]),
     (("zed_depth",), ["no zed_depth", "needs the ZED depth"])])
@@ -69,6 +71,7 @@ def test_recording_without_a_stream(platform_tools, sim, rig, tmp_path, drop, wo
         assert r.returncode == 2 and "no thermal_left" in r.stderr
 
 
+@pytest.mark.slow
 def test_calibration_of_other_cameras_is_refused(platform_tools, calibrate, sim, tmp_path):
     import mrcal
     cal = tmp_path / "cal"
@@ -86,6 +89,7 @@ def test_calibration_of_other_cameras_is_refused(platform_tools, calibrate, sim,
     assert r.returncode == 2 and "thermal_right.cameramodel: missing" in r.stderr
 
 
+@pytest.mark.slow
 def test_a_calibrated_set_is_used_and_recorded(platform_tools, calibrate, sim, tmp_path):
     cal = tmp_path / "cal"
     assert calibrate("nominal", "--out", str(cal)).returncode == 0
@@ -96,6 +100,7 @@ def test_a_calibrated_set_is_used_and_recorded(platform_tools, calibrate, sim, t
     assert str(cal) in header
 
 
+@pytest.mark.slow
 def test_output_folder_holding_a_different_export(platform_tools, sim, tmp_path):
     out = tmp_path / "ds"
     assert platform_tools("export", str(sim[0]), "--out", str(out)).returncode == 0

@@ -27,6 +27,7 @@ def rows(out):
         return list(csv.DictReader(f))
 
 
+@pytest.mark.slow
 def test_index_pairs_rate_and_ffc(done, sim, rig):
     out, summary = done
     _, truth = sim
@@ -127,6 +128,7 @@ def test_a_folder_holding_a_different_export_is_refused(done, sim, rig, tmp_path
     assert [p.name for p in other.iterdir()] == ["notes.txt"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("engine", ["pool", "dask"])
 def test_engines_give_the_same_dataset(done, sim, rig, tmp_path, engine):
     if engine == "dask":
@@ -140,6 +142,7 @@ def test_engines_give_the_same_dataset(done, sim, rig, tmp_path, engine):
     assert np.array_equal(a, b)
 
 
+@pytest.mark.slow
 def test_command(platform_tools, sim, tmp_path):
     r = platform_tools("export", str(sim[0]), "--out", str(tmp_path / "ds"), "--rate", "2", "--json")
     assert r.returncode == 0, r.stderr

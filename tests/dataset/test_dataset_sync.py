@@ -79,6 +79,7 @@ def test_ffc_periods_from_status_and_from_frozen_frames(report, sim, rig):
         assert abs(got["end_ns"] - e["end_ns"]) < 2 * 1e9 / truth["rate_hz"]
 
 
+@pytest.mark.slow
 def test_command_json_and_plots(platform_tools, sim, tmp_path):
     # the simulation drops 2 % of frames at random: about 3 % here, above the default 2 % limit
     r = platform_tools("sync-check", str(sim[0]), "--json", "--plots", str(tmp_path / "plots"),
@@ -95,6 +96,7 @@ def test_command_json_and_plots(platform_tools, sim, tmp_path):
     assert "FFC thermal_left" in ffc_plot
 
 
+@pytest.mark.slow
 def test_limits_are_configurable_and_fail_with_exit_1(platform_tools, sim):
     r = platform_tools("sync-check", str(sim[0]), "--set", "processing.sync_limits.max_pair_jitter_p99_ms=0.05",
                        "--set", "processing.sync_limits.max_drop_percent=6")
@@ -103,6 +105,7 @@ def test_limits_are_configurable_and_fail_with_exit_1(platform_tools, sim):
     assert len(fails) == 3 and all("jitter p99" in line for line in fails)
 
 
+@pytest.mark.slow
 def test_a_drifting_thermal_clock_is_measured_and_fails(rig, tmp_path):
     from platform_tools.sim.timeline import SimParams
     from platform_tools.sim.writer import simulate

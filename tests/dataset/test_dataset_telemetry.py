@@ -85,6 +85,7 @@ def test_export_plan_flags_the_ffc_frames_without_the_status_topic(no_status, ri
     assert pl.counts["ffc_dropped"] == 0   # keep_ffc
 
 
+@pytest.mark.slow
 def test_sync_check_command_without_the_status_topic(platform_tools, no_status):
     path, truth = no_status
     r = platform_tools("sync-check", str(path), "--json")

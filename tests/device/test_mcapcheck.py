@@ -24,6 +24,7 @@ def clean_bag(tmp_path_factory):
     return folder / "b_0.mcap"
 
 
+@pytest.mark.slow
 def test_a_cleanly_stopped_file_checks_ok(clean_bag):
     status = mcapcheck.check(clean_bag)
     assert status.ok and status.messages > 20

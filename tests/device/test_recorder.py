@@ -3,6 +3,8 @@
 the disk filling, power loss. The recording already written is never lost; the next press works."""
 from __future__ import annotations
 
+import pytest
+
 import json
 import os
 import signal
@@ -45,6 +47,7 @@ def record_for(rec: Recorder, seconds: float) -> dict:
     return rec.finished[-1]
 
 
+@pytest.mark.slow
 def test_press_records_press_stops_with_a_checked_file_and_metadata(make_recorder):
     rec = make_recorder()
     meta = record_for(rec, 1.0)
@@ -59,6 +62,7 @@ def test_press_records_press_stops_with_a_checked_file_and_metadata(make_recorde
     assert (rec.output_dir / meta["name"] / "bag" / "metadata.yaml").is_file()
 
 
+@pytest.mark.slow
 def test_the_button_loop_with_a_bouncing_button_starts_one_recording(make_recorder):
     rec = make_recorder()
     gpio = MemoryGpio()
@@ -95,6 +99,7 @@ def test_missing_camera_refuses_to_start_then_the_next_press_works(make_recorder
     assert record_for(rec, 0.5)["status"] == "stopped"
 
 
+@pytest.mark.slow
 def test_recorder_crash_mid_run_keeps_what_was_written(make_recorder):
     rec = make_recorder("die-after:1.5")
     assert rec.start()
@@ -109,6 +114,7 @@ def test_recorder_crash_mid_run_keeps_what_was_written(make_recorder):
     assert rec.start() and rec.state is State.RECORDING                   # the next press works
 
 
+@pytest.mark.slow
 def test_recorder_hanging_on_sigint_is_escalated_and_recovered(make_recorder):
     rec = make_recorder("hang-on-sigint", "recording.stop_grace_s=0.6", "on_device.recorder_term_grace_s=0.4")
     meta = record_for(rec, 1.0)
@@ -119,6 +125,7 @@ def test_recorder_hanging_on_sigint_is_escalated_and_recovered(make_recorder):
     assert any(e.get("code") == "RECORDER_HUNG" for e in events(rec))
 
 
+@pytest.mark.slow
 def test_disk_watchdog_stops_cleanly_before_the_disk_fills(make_recorder, data_drive):
     """The watchdog threshold is put 60 MB below what is free now; the recorder writes ~40 MB/s."""
     mount, _ = data_drive
@@ -135,6 +142,7 @@ def test_disk_watchdog_stops_cleanly_before_the_disk_fills(make_recorder, data_d
     assert free_bytes(mount) > stop_at_gb * 1e9 - 30e6
 
 
+@pytest.mark.slow
 def test_power_loss_leaves_a_truncated_file_that_the_next_start_recovers(make_recorder):
     rec = make_recorder()
     assert rec.start()

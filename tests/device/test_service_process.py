@@ -35,6 +35,7 @@ def press(pins: Path, hold_s: float = 0.4) -> None:
     (pins / "pin29").write_text("1\n")
 
 
+@pytest.mark.slow
 def test_sigterm_during_a_recording_stops_it_cleanly(data_drive, dev_dir, tmp_path, overrides):
     _, out = data_drive
     pins = tmp_path / "pins"
@@ -95,6 +96,7 @@ def doctor(overrides, dev_dir, *extra):
     return r, {c["name"]: c for c in json.loads(r.stdout)["checks"]}
 
 
+@pytest.mark.slow
 def test_doctor_passes_with_cameras_triggered_in_slave_mode(overrides, dev_dir, bosons):
     r, checks = doctor(overrides, dev_dir)
     assert r.returncode == 0, r.stdout + r.stderr
@@ -102,6 +104,7 @@ def test_doctor_passes_with_cameras_triggered_in_slave_mode(overrides, dev_dir, 
     assert json.loads(r.stdout)["cameras"]["left"]["serial"] == 93588
 
 
+@pytest.mark.slow
 def test_doctor_sees_the_trigger_stopped(overrides, dev_dir, bosons):
     _, trigger = bosons
     trigger.stop()
@@ -110,6 +113,7 @@ def test_doctor_sees_the_trigger_stopped(overrides, dev_dir, bosons):
     assert checks["trigger"]["status"] == "failed" and "0.0 Hz" in checks["trigger"]["detail"]
 
 
+@pytest.mark.slow
 def test_doctor_sees_a_wrong_sync_mode(overrides, dev_dir, bosons):
     emus, _ = bosons
     emus["right"].state.settings["ext_sync_mode"] = 0
@@ -118,6 +122,7 @@ def test_doctor_sees_a_wrong_sync_mode(overrides, dev_dir, bosons):
     assert checks["sync mode"]["status"] == "failed" and "right" in checks["sync mode"]["detail"]
 
 
+@pytest.mark.slow
 def test_doctor_sees_telemetry_off(overrides, dev_dir, bosons):
     emus, _ = bosons
     emus["left"].state.settings["telemetry_state"] = 0
@@ -127,6 +132,7 @@ def test_doctor_sees_telemetry_off(overrides, dev_dir, bosons):
     assert "FFC status" in checks["telemetry"]["detail"]
 
 
+@pytest.mark.slow
 def test_doctor_sees_a_missing_camera(overrides, dev_dir, bosons):
     emus, _ = bosons
     emus["left"].stop()
@@ -135,6 +141,7 @@ def test_doctor_sees_a_missing_camera(overrides, dev_dir, bosons):
     assert checks["thermal cameras"]["status"] == "failed" and "93588" in checks["thermal cameras"]["detail"]
 
 
+@pytest.mark.slow
 def test_doctor_fails_when_output_is_not_on_the_data_drive(dev_dir, tmp_path, platform_tools):
     r = platform_tools("doctor", "--json", "--no-boson", "--dev-dir", str(dev_dir), "--set",
                        f"recording.data_mount={tmp_path}", "--set", f"recording.output_dir={tmp_path}/rec")

@@ -24,6 +24,7 @@ INFO = """return {
 };"""
 
 
+@pytest.mark.slow
 def test_every_page_loads_with_its_images_and_links(docs_default, browser):
     ids: dict[Path, set[str]] = {}
     links: list[tuple[str, str]] = []
@@ -71,6 +72,7 @@ def _step(md: str, title_part: str) -> str:
     return next(p for p in parts if title_part in p.splitlines()[0])
 
 
+@pytest.mark.slow
 def test_guide_follows_the_rig(docs_default, docs_changed):
     a, b = (d / "assembly.md" for d in (docs_default, docs_changed))
     lid_a, lid_b = _step(a.read_text(), "handles"), _step(b.read_text(), "handles")
@@ -92,6 +94,7 @@ def test_guide_content(docs_default):
 STEPS = REPO / "docs" / "assembly" / "steps.yaml"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("old, new, expected", [
     ("nodes: [zed_mount, insert_zed_mount_*", "nodes: [zed_mout, insert_zed_mount_*",
      "steps[4].nodes[0]: 'zed_mout' is not a node of the CAD assembly (did you mean 'zed_mount'?)"),

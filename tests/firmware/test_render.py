@@ -31,6 +31,7 @@ def default_render(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.mark.slow
 def test_every_check_passes_on_the_default_rig(default_render):
     results = run_checks(default_render, load_rig(None, [SERIALS[1], SERIALS[3]]))
     assert [r for r in results if r.status == FAILED] == []
@@ -38,6 +39,7 @@ def test_every_check_passes_on_the_default_rig(default_render):
                                                            "parameter files", "systemd unit"}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("tool,check", [("docker-compose", "compose valid"), ("shellcheck", "shellcheck")])
 def test_real_validators_run_when_installed(default_render, tool, check):
     import shutil
@@ -122,6 +124,7 @@ def test_rendered_rig_file_is_the_rig_that_was_rendered(default_render):
 
 
 # ----------------------------------------------------------------------------- the command
+@pytest.mark.slow
 def test_render_command_writes_a_checked_folder(platform_tools, tmp_path):
     r = platform_tools("firmware", "render", "--out", str(tmp_path / "fw"), "--json")
     assert r.returncode == 0, r.stderr
@@ -132,12 +135,14 @@ def test_render_command_writes_a_checked_folder(platform_tools, tmp_path):
     assert json.loads((tmp_path / "fw" / "MANIFEST.json").read_text())["rig_hash"] == doc["rig_hash"]
 
 
+@pytest.mark.slow
 def test_a_relative_output_folder(platform_tools, tmp_path):
     r = platform_tools("firmware", "render", "--out", "fw", "-q", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "fw" / "compose.yaml").is_file()
 
 
+@pytest.mark.slow
 def test_a_failed_check_leaves_the_previous_output(platform_tools, tmp_path):
     out = tmp_path / "fw"
     assert platform_tools("firmware", "render", "--out", str(out), "-q").returncode == 0
@@ -149,6 +154,7 @@ def test_a_failed_check_leaves_the_previous_output(platform_tools, tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["fw"]   # no staging folder left behind
 
 
+@pytest.mark.slow
 def test_a_bad_rig_value_is_one_line_and_exit_2(platform_tools, tmp_path):
     r = platform_tools("firmware", "render", "--out", str(tmp_path / "fw"),
                        "--set", "camera_models.zed_x_hd1200.height_px=700")
@@ -157,6 +163,7 @@ def test_a_bad_rig_value_is_one_line_and_exit_2(platform_tools, tmp_path):
     assert not (tmp_path / "fw").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("edit,check", [
     (("compose.yaml", "stop_grace_period: 30s", "stop_grace_period: 5s"), "compose matches rig"),
     (("bin/rig-up.sh", 'cd "$(dirname "$0")/.."', 'cd $(dirname $0)/..'), "shellcheck"),
@@ -210,6 +217,7 @@ def test_ros_distro_reaches_the_dockerfiles():
     assert "ARG ROS_DISTRO=iron" in files["docker/zed/Dockerfile"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("override,message", [
     ("on_device.images.zed=a/zed:humble-l4t-r35", "different L4T releases"),
     ("on_device.images.tools=a/tools:latest", "names no L4T release"),
@@ -234,6 +242,7 @@ def test_the_status_publisher_is_launched_for_each_side(default_render):
         assert "telemetry_rows:=2" in cmd
 
 
+@pytest.mark.slow
 def test_the_images_install_only_firmware_and_what_it_imports(tmp_path):
     """The build context holds firmware, platform_tools.rig and platform_tools.boson, nothing else of
     this repository, and every on-device module imports from it alone (no platform_tools.cli, dataset,

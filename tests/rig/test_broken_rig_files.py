@@ -63,6 +63,7 @@ BROKEN = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name,breaker,key,words", BROKEN, ids=[b[0] for b in BROKEN])
 def test_broken_file_gets_one_clear_line(tmp_path: Path, rig_text: str, name, breaker, key, words):
     bad = tmp_path / "rig.yaml"
@@ -108,6 +109,7 @@ def test_several_problems_are_all_reported(tmp_path: Path, rig_text: str):
     assert keys == ["enclosure.wall_mm", "sync.rate_hz"]
 
 
+@pytest.mark.slow
 def test_cli_validate_bad_file_exit_2_no_traceback(tmp_path: Path, rig_text: str, platform_tools):
     bad = tmp_path / "rig.yaml"
     bad.write_text(edit(rig_text, "    baseline_mm: 120\n", "    baseline_mm: -5\n"))
@@ -118,6 +120,7 @@ def test_cli_validate_bad_file_exit_2_no_traceback(tmp_path: Path, rig_text: str
     assert len(lines) == 1 and "sensors.thermal.baseline_mm: got -5 mm; expected a number in mm > 0" in lines[0]
 
 
+@pytest.mark.slow
 def test_cli_validate_json(tmp_path: Path, rig_text: str, platform_tools):
     import json
     bad = tmp_path / "rig.yaml"

@@ -36,6 +36,7 @@ def test_override_sets_optional_key_absent_from_file():
     assert rig.desc.sensors.thermal.left.serial == 93588
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("override,words", [
     ("sensors.thermal.baseline=150", ["unknown key sensors.thermal.baseline",
                                       "did you mean sensors.thermal.baseline_mm?"]),
@@ -71,6 +72,7 @@ def test_override_value_validated_like_the_file(override, key, words):
         assert w in line, (w, line)
 
 
+@pytest.mark.slow
 def test_cli_show_with_override_json(platform_tools):
     r = platform_tools("rig", "show", "--json", "--set", "sensors.thermal.baseline_mm=140")
     assert r.returncode == 0, r.stderr
@@ -81,6 +83,7 @@ def test_cli_show_with_override_json(platform_tools):
     assert doc["derived"]["overrides"] == ["sensors.thermal.baseline_mm=140"]
 
 
+@pytest.mark.slow
 def test_cli_bad_override_exit_2(platform_tools):
     r = platform_tools("rig", "show", "--set", "sensors.thermal.baselin_mm=140")
     assert r.returncode == 2

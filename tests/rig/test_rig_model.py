@@ -53,6 +53,7 @@ def test_thermal_module_width(rig):
     assert rig.thermal_module_width_mm() == pytest.approx(body + 2 * (hs.wall_mm + hs.fin_height_mm))
 
 
+@pytest.mark.slow
 def test_export_writes_real_formats(tmp_path: Path, platform_tools, rig):
     vnlog = pytest.importorskip("vnlog")
     out = tmp_path / "rig"
@@ -77,12 +78,14 @@ def test_export_writes_real_formats(tmp_path: Path, platform_tools, rig):
     np.testing.assert_allclose(q, T.quaternion(), atol=1e-6)
 
 
+@pytest.mark.slow
 def test_export_to_unwritable_folder_exit_2(platform_tools):
     r = platform_tools("rig", "export", "--out", "/sys/rgbt-rig")  # refused even to root
     assert r.returncode == 2, r.stderr
     assert "/sys/rgbt-rig: cannot write" in r.stderr and "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_export_into_a_file_path_exit_2(tmp_path: Path, platform_tools):
     f = tmp_path / "afile"
     f.write_text("x")

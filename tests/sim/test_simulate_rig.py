@@ -34,6 +34,7 @@ def sim(tmp_path_factory, rig):
     return rig, out, truth, read(out / "bag" / "bag_0.mcap")
 
 
+@pytest.mark.slow
 def test_every_rig_topic_with_its_ros_type(sim):
     rig, _, truth, msgs = sim
     t = rig.desc.on_device.topics
@@ -96,6 +97,7 @@ def test_the_clock_step_is_in_the_stamps(sim):
     assert len(big) == 1 and big[0] - np.median(d) == pytest.approx(truth["clock_step"]["step_ns"], rel=0.01)
 
 
+@pytest.mark.slow
 def test_command_follows_the_trigger_rate(platform_tools, tmp_path):
     r = platform_tools("simulate-rig", "--out", str(tmp_path / "s"), "--duration", "2", "--scale", "0.05",
                        "--set", "sync.rate_hz=15", "--json")
@@ -104,6 +106,7 @@ def test_command_follows_the_trigger_rate(platform_tools, tmp_path):
     assert truth["triggers"] == 30 and truth["rate_hz"] == 15
 
 
+@pytest.mark.slow
 def test_bad_duration_is_one_line_exit_2(platform_tools, tmp_path):
     r = platform_tools("simulate-rig", "--out", str(tmp_path / "s"), "--duration", "0")
     assert r.returncode == 2 and "--duration" in r.stderr and not (tmp_path / "s").exists()
