@@ -2,7 +2,7 @@
 assembly's placements (:func:`cad.assembly.camera_frames`), so the STEP and the extrinsics come from
 one code path: move a camera in the rig description and both follow.
 
-Frames (platform_tools/frames.py): the rig frame is REP-103 (x forward, y left, z up, mm, origin
+Frames (platform_tools/rig/frames.py): the rig frame is REP-103 (x forward, y left, z up, mm, origin
 at the ZED X centre); optical frames are x right, y down, z forward; ``T_a_b`` maps b into a.
 """
 from __future__ import annotations
