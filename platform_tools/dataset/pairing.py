@@ -1,9 +1,10 @@
 """Which frames make the dataset: four-camera pairs, FFC frames out, sampled at a rate.
 
 - Times are header stamps with the host's clock steps taken out (sync.find_clock_steps).
-- Each camera's constant offset after the ZED left (trigger edge, transport) is measured on the
-  recording (median pairing residual) and removed; a ZED left frame pairs with the nearest frame of
-  each other camera (and the depth with the same stamp) when what remains is within the tolerance.
+- Each Boson frame pairs with the ZED left frame of the trigger that exposed it (:mod:`.trigger`: the
+  offset of any size, resolved by causality, trigger gaps, the rig's stated latency, continuity
+  across clock steps; an ambiguity is an error, never a guess); the ZED right and depth pair with the
+  left frame of the same stamp. A pair is complete when each residual is within the tolerance.
 - A thermal frame is an FFC frame when its camera's status says an FFC is in progress, or its pixels
   repeat the previous frame's (frozen); it and ``ffc_margin`` frames on each side are dropped
   (kept but flagged with ``keep_ffc``).
@@ -17,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .recording import Recording
-from .sync import corrected, ffc_periods, find_clock_steps, offsets_ns
+from .sync import corrected, ffc_periods, find_clock_steps, offsets_ns, triggers
 
 OTHERS = ("zed_right", "zed_depth", "thermal_left", "thermal_right")
 THERMAL = ("thermal_left", "thermal_right")
@@ -60,13 +61,25 @@ def plan(rec: Recording, rig, *, rate_hz: float, tolerance_ms: float, ffc_margin
     ref = tc["zed_left"]
     match, ok = {}, np.ones(len(ref), bool)
     resid = {}
-    for s in OTHERS:
+    for s in ("zed_right", "zed_depth"):      # the same grab as the left image: the same stamp
         ts = tc[s][order[s]]
         j = _nearest(ts, ref + off[s])
         r = ts[j] - (ref + off[s])
         match[s] = order[s][j]
         resid[s] = r / 1e6
         ok &= np.abs(r) <= tolerance_ms * 1e6
+    # the Bosons: by the trigger that exposed each frame (trigger.py), never by the nearest stamp
+    trig = triggers(rec, rig)
+    for s in THERMAL:
+        ct = trig.cameras[s]
+        pos = {int(k): i for i, k in enumerate(ct.trigger) if k >= 0}
+        j = np.array([pos.get(int(k), -1) for k in trig.reference.trigger], np.int64)
+        have = j >= 0
+        match[s] = np.where(have, j, 0)
+        resid[s] = np.where(have, ct.residual_ns[match[s]], np.nan) / 1e6
+        ok &= have & (np.abs(np.nan_to_num(resid[s], nan=1e9)) <= tolerance_ms)
+        off[s] = float(np.average([g.offset_ns for g in ct.segments],
+                                  weights=[g.last - g.first + 1 for g in ct.segments]))
     # FFC frames, dilated by the margin (in frames of that camera)
     ffc_flag, periods = {}, {}
     for cam in THERMAL:

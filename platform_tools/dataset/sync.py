@@ -24,7 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .recording import CAMERAS, Recording
+from .recording import CAMERAS, Recording, RecordingError
+from . import trigger as trig
 
 NS = 1_000_000_000
 PAIRS = (("thermal_left", "thermal_right"), ("zed_left", "thermal_left"), ("zed_left", "thermal_right"))
@@ -221,7 +222,13 @@ def analyse(rec: Recording, rig, limits: Limits) -> dict:
         checks.append({"check": f"{name} drift", "value": round(p["drift_ppm"], 2),
                        "limit": limits.max_drift_ppm, "unit": "ppm",
                        "ok": abs(p["drift_ppm"]) - 3 * p["drift_stderr_ppm"] <= limits.max_drift_ppm})
-    report = {"recording": str(rec.path), "files": [str(f) for f in rec.files], "recovered": rec.recovered,
+    try:
+        trig_rep, trig_err = trigger_report(triggers(rec, rig)), None
+    except RecordingError as exc:
+        trig_rep, trig_err = None, str(exc)
+    checks.append({"check": "trigger of every thermal frame", "value": trig_err or "established",
+                   "limit": "unambiguous", "unit": "", "ok": trig_err is None})
+    report = {"triggers": trig_rep, "recording": str(rec.path), "files": [str(f) for f in rec.files], "recovered": rec.recovered,
               "nominal_rate_hz": rate, "clock_steps": steps, "streams": streams, "ffc": ffc, "pairs": pairs,
               "limits": limits.__dict__, "checks": checks,
               "verdict": "pass" if all(c["ok"] for c in checks) else "fail"}
@@ -240,4 +247,39 @@ def offsets_ns(rec: Recording, rig) -> dict[str, float]:
         if rec.has(c):
             _, r = pair_residuals(ref, corrected(rec.streams[c].stamp_ns, steps), period)
             out[c] = float(np.median(r)) if len(r) else 0.0
+    return out
+
+
+def triggers(rec: Recording, rig) -> "trig.Assignment":
+    """Which trigger exposed every thermal frame (see :mod:`.trigger`); RecordingError when ambiguous."""
+    period = 1e9 / rig.desc.sync.rate_hz
+    zl = rec.streams["zed_left"]
+    imu = rec.streams["zed_imu"].stamp_ns if rec.has("zed_imu") else None
+    ref = trig.reference(zl.stamp_ns, period, imu)
+    out = trig.Assignment(period, ref)
+    windows = rig.desc.sync.stamp_latency_ms
+    for cam in ("thermal_left", "thermal_right"):
+        st = rec.streams[cam]
+        w = windows.get(cam)
+        counter = getattr(st, "counter", None)
+        try:
+            out.cameras[cam] = trig.assign(zl.stamp_ns, st.stamp_ns, period, camera=cam, ref=ref,
+                                           window_ms=(w.min.value, w.max.value) if w else None,
+                                           counter=counter, where=f"{rec.path}: {st.topic}: ")
+        except trig.TriggerError as exc:
+            raise RecordingError(str(exc)) from None
+    return out
+
+
+def trigger_report(a: "trig.Assignment") -> dict:
+    """Per camera: offset after the ZED (per segment), its uncertainty, how it was established, steps."""
+    def steps(ct):
+        return [{"at_ns": s.at_ns, "step_ms": s.step_ns / 1e6, "exact": s.exact} for s in ct.steps]
+    out = {"zed_left": {"clock_steps": steps(a.reference)}}
+    for cam, ct in a.cameras.items():
+        out[cam] = {"segments": [{"frames": [g.first, g.last], "offset_ms": g.offset_ns / 1e6,
+                                  "uncertainty_ms": g.uncertainty_ns / 1e6, "established_by": g.established_by,
+                                  "candidates_ms": g.candidates_ms} for g in ct.segments],
+                    "clock_steps": steps(ct), "unassigned_frames": int((ct.trigger < 0).sum()),
+                    "jitter_ms": ct.jitter_ns / 1e6}
     return out

@@ -298,6 +298,18 @@ class Sync:
     boson_mode: Literal["slave", "master", "disabled"]
     #: write the sync mode to the Bosons' flash (a slave without a trigger shows no video)
     persist: bool
+    #: per thermal camera: where its header stamp falls after the ZED left's stamp of the same trigger
+    #: (edge, exposure, USB transport, driver buffering). It decides which trigger exposed a frame when
+    #: the recording holds no other evidence (platform_tools.dataset.trigger): keep it narrower than one
+    #: trigger period, and measure it on the rig
+    stamp_latency_ms: Mapping[str, "LatencyWindow"] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class LatencyWindow:
+    """``{min: {value: 0, source: ..., confidence: ...}, max: {...}}`` in milliseconds."""
+    min: Annotated[Sourced, Unit("ms")]
+    max: Annotated[Sourced, Unit("ms")]
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,337 @@
+"""Which trigger pulse exposed each frame: pairing by trigger, not by nearest stamp.
+
+The ZED left defines the trigger numbering (its stamp is the trigger's, plus a constant). For every
+other camera the stamps alone give the offset only modulo one trigger period (its *phase*); the
+whole number of periods is the ambiguity this module resolves, per *segment* (the recording cut at
+every clock step of either stream), from the evidence the recording holds:
+
+1. **Causality**: a frame is never stamped before its trigger (offset >= -3 sigma of its jitter).
+2. **Trigger gaps**: a trigger pulse that never came is missing from every camera at the same trigger;
+   the candidate offset that lines the gaps of both streams up is the right one. With the Boson's
+   telemetry frame counter, a thermal gap whose counter did not skip is a missing pulse (an anchor);
+   one whose counter skipped is a host drop (not an anchor).
+3. **The rig's stated latency** (``sync.stamp_latency_ms``): a window narrower than a period leaves
+   one candidate.
+
+Evidence that disagrees, or none that leaves exactly one candidate, ends in :class:`TriggerError`
+(one line: file, topic, the candidates and the evidence missing), never in a guess.
+
+**Clock steps per stream**: each stream's stamps minus their trigger grid (local indices from the
+intervals, ``max(1, round(interval / period))``) are constant but for jitter; a step is where the
+median of the frames after differs from the median before by more than ``STEP_MIN_NS``. Backward steps
+(either sign, any size) are sized exactly; a forward step is known modulo one period unless the
+segments' alignment, the IMU or the frame counter says how many periods it held.
+
+Pure functions over stamp arrays (numpy); no I/O.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+#: a clock step smaller than this is not told apart from jitter (the issue asks for 5 ms)
+STEP_MIN_NS = 2_500_000
+#: frames on each side of a candidate step whose medians are compared
+STEP_WINDOW = 8
+#: anchors needed without a frame counter to classify the gaps (chance coincidences of host drops)
+MIN_ANCHORS_WITHOUT_COUNTER = 3
+#: a frame this far (or 6 robust sigmas) from its segment's trigger grid is left unassigned
+UNFIT_MIN_NS = 4_000_000
+#: candidate offsets searched, in periods
+MAX_PERIODS = 8
+
+
+class TriggerError(Exception):
+    """The trigger of some frames cannot be established; ``str()`` is one line."""
+
+
+@dataclass
+class Step:
+    index: int                  # first frame (recording order) after the step
+    at_ns: int                  # its stamp as recorded
+    step_ns: int                # size (wrapped to one period when sized by stamps alone, forward)
+    exact: bool                 # sized without the modulo-one-period ambiguity
+
+
+@dataclass
+class Segment:
+    first: int                  # frame range [first, last] of the camera (recording order)
+    last: int
+    offset_ns: float            # camera stamp - ZED left stamp of the same trigger
+    uncertainty_ns: float       # standard error of that offset
+    established_by: str
+    candidates_ms: list[float]
+
+
+@dataclass
+class CameraTriggers:
+    camera: str
+    trigger: np.ndarray         # int64: trigger number of each frame (ZED left numbering; -1: none), recording order
+    residual_ns: np.ndarray     # stamp - (ZED grid at that trigger) - segment offset
+    segments: list[Segment]
+    steps: list[Step]
+    jitter_ns: float
+    host_drops: int = 0
+    anchors: int = 0
+
+
+@dataclass
+class Assignment:
+    period_ns: float
+    reference: CameraTriggers   # the ZED left
+    cameras: dict[str, CameraTriggers] = field(default_factory=dict)
+
+
+# ----------------------------------------------------------------------------- one stream
+def local_indices(t: np.ndarray, period_ns: float) -> np.ndarray:
+    """Trigger count of each frame since the first, from the intervals (a backward step still counts
+    as one period: a frame never comes less than a period after the last)."""
+    d = np.diff(t.astype(np.int64))
+    m = np.maximum(1, np.round(d / period_ns).astype(np.int64))
+    return np.concatenate([[0], np.cumsum(m)])
+
+
+def find_steps(t: np.ndarray, k: np.ndarray, period_ns: float, window: int = STEP_WINDOW,
+               min_ns: float = STEP_MIN_NS) -> list[Step]:
+    """Clock steps of one stream: where the residual to its trigger grid changes level."""
+    r = (t - t[0] - k * period_ns).astype(float)
+    n = len(r)
+    if n < 2 * window + 1:
+        return []
+    med = np.median(sliding_window_view(r, window), axis=1)      # med[j] = median(r[j:j+window])
+    i = np.arange(window, n - window + 1)
+    jump = med[i] - med[i - window]
+    steps, j = [], 0
+    big = np.abs(jump) > min_ns
+    while j < len(i):
+        if not big[j]:
+            j += 1
+            continue
+        e = j
+        while e + 1 < len(i) and big[e + 1] and np.sign(jump[e + 1]) == np.sign(jump[j]):
+            e += 1
+        # the step is at the one interval of the plateau that carries it (medians are flat around it)
+        lo, hi = int(i[j]), int(i[e])
+        sign = np.sign(jump[j])
+        at = lo + int(np.argmax(sign * (r[lo:hi + 1] - r[lo - 1:hi])))
+        size = float(np.median(r[at:at + window]) - np.median(r[at - window:at]))
+        # from stamps alone a step is known modulo one period (a frame dropped at the step shifts it by
+        # one); the IMU (reference()) sizes it exactly
+        steps.append(Step(at, int(t[at]), int(round(size)), exact=False))
+        j = e + 1
+    return steps
+
+
+def segments_of(n: int, cuts: list[int]) -> list[tuple[int, int]]:
+    edges = [0] + sorted(set(c for c in cuts if 0 < c < n)) + [n]
+    return [(a, b - 1) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
+def reference(t: np.ndarray, period_ns: float, imu: np.ndarray | None = None) -> CameraTriggers:
+    """The ZED left: its frames define the trigger numbering (steps found, the grid fitted per segment).
+    The IMU (same clock, 200 Hz, no drops in practice) sizes a forward step exactly."""
+    k = local_indices(t, period_ns)
+    steps = find_steps(t, k, period_ns)
+    if imu is not None and len(imu) > 10:
+        di = np.diff(imu.astype(np.int64))
+        med = float(np.median(di))
+        for st in steps:
+            if st.exact:
+                continue
+            lo, hi = int(t[st.index - 1]), int(t[st.index])
+            near = np.nonzero((imu[1:] >= min(lo, hi) - 2 * period_ns) & (imu[:-1] <= max(lo, hi) + 2 * period_ns))[0]
+            if len(near):
+                j = near[np.argmax(np.abs(di[near] - med))]
+                size = di[j] - med
+                if abs(size) >= STEP_MIN_NS and abs(((size - st.step_ns) / period_ns) - round((size - st.step_ns) / period_ns)) < 0.1:
+                    st.step_ns, st.exact = int(round(st.step_ns + round((size - st.step_ns) / period_ns)
+                                                      * period_ns)), True
+                    # the triggers that passed over the step, now that its size is known
+                    d = int(t[st.index]) - int(t[st.index - 1])
+                    k[st.index:] += max(1, round((d - st.step_ns) / period_ns)) - (k[st.index] - k[st.index - 1])
+    res = np.zeros(len(t))
+    for a, b in segments_of(len(t), [s.index for s in steps]):
+        res[a:b + 1] = _grid_residual(t[a:b + 1], k[a:b + 1])
+    jit = float(np.std(res)) if len(res) > 2 else 0.0
+    return CameraTriggers("zed_left", k, res, [Segment(0, len(t) - 1, 0.0, 0.0, "reference", [0.0])],
+                          steps, jit)
+
+
+def _grid_residual(t: np.ndarray, k: np.ndarray) -> np.ndarray:
+    if len(t) < 2:
+        return np.zeros(len(t))
+    slope, icpt = np.polyfit(k.astype(float), (t - t[0]).astype(float), 1)
+    return (t - t[0]) - (icpt + slope * k)
+
+
+def _grid(tz: np.ndarray, kz: np.ndarray, steps: list[Step]):
+    """Per ZED segment: (first stamp, last stamp, intercept, period) of its fitted trigger grid."""
+    out = []
+    for a, b in segments_of(len(tz), [s.index for s in steps]):
+        kk, tt = kz[a:b + 1].astype(float), tz[a:b + 1].astype(float)
+        if len(tt) >= 2:
+            slope, icpt = np.polyfit(kk, tt - tz[0], 1)
+        else:
+            slope, icpt = None, float(tt[0] - tz[0])
+        out.append((int(tz[a]), int(tz[b]), icpt + float(tz[0]), slope))
+    return out
+
+
+# ----------------------------------------------------------------------------- another camera
+def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, window_ms: tuple[float, float] | None,
+           counter: np.ndarray | None = None, ref: CameraTriggers | None = None,
+           where: str = "") -> CameraTriggers:
+    """Trigger number of every frame of one camera, in the ZED left's numbering."""
+    ref = ref or reference(tz, period_ns)
+    kz = ref.trigger
+    zgrid = _grid(tz, kz, ref.steps)
+    ks = local_indices(ts, period_ns)
+    own = find_steps(ts, ks, period_ns)
+    # cut where either stream's clock stepped: the camera's own steps, and the ZED's (mapped to this
+    # stream: the same event when this stream stepped there too, else where its stamps pass the ZED's
+    # last stamp before the step, both still on the clock before it)
+    cuts: dict[int, dict] = {o.index: {"own": o, "zed": None} for o in own}
+    running = np.maximum.accumulate(ts)
+    for z in ref.steps:
+        pre = int(tz[z.index - 1])
+        same = [o.index for o in own if abs(int(ts[o.index - 1]) - pre) < 3 * period_ns]
+        i = same[0] if same else int(np.searchsorted(running, pre + period_ns / 2))
+        cuts.setdefault(i, {"own": None, "zed": None})["zed"] = z
+    host_drop, anchor_gap = _classify_gaps(ts, counter, period_ns)
+    zmissing = set(np.setdiff1d(np.arange(kz[0], kz[-1] + 1), kz).tolist())
+    trig = np.zeros(len(ts), np.int64)
+    resid = np.zeros(len(ts))
+    segs = []
+    cand_default_p = period_ns if not zgrid or zgrid[0][3] is None else zgrid[0][3]
+    n_anchor_total = 0
+    for a, b in segments_of(len(ts), list(cuts)):
+        t = ts[a:b + 1].astype(np.int64)
+        # the ZED grid of this segment: as many ZED steps before it as cuts from ZED steps
+        gi = min(sum(1 for i, c in cuts.items() if i <= a and c["zed"] is not None), len(zgrid) - 1)
+        _, _, icpt, slope = zgrid[gi]
+        P = slope or cand_default_p
+        x = (t - icpt) / P
+        frac = np.mod(x, 1.0)
+        ang = np.angle(np.mean(np.exp(2j * np.pi * frac)))
+        phase = float(np.mod(ang / (2 * np.pi), 1.0))                  # in [0, 1) periods
+        base = np.round(x - phase).astype(np.int64)                   # ZED trigger whose grid is `phase` before
+        dev = (x - phase - base) * P
+        sigma = float(np.std(dev)) if len(dev) > 2 else 0.0
+        unc = sigma / np.sqrt(max(len(dev), 1))
+        evidence = []
+        after_unknown_step = None
+        # continuity across the step that starts this segment, when its size is known exactly (or the
+        # same step hit both clocks: then its size cancels)
+        cut = cuts.get(a)
+        if segs and cut is not None:
+            o, z = cut["own"], cut["zed"]
+            # the same step on both clocks (matched in time): sizes agree, or agree modulo a period
+            # when one of them is known exactly
+            both = (o is not None and z is not None and abs(_wrap(o.step_ns - z.step_ns, P)) < 3e6
+                    and (abs(o.step_ns - z.step_ns) < 3e6 or o.exact or z.exact))
+            if not both and not all(st is None or st.exact for st in (o, z)):
+                # one clock stepped forward by a size known modulo a period: the clocks now differ by an
+                # unknown number of periods, so the stated latency says nothing; only trigger gaps can tell
+                after_unknown_step = (o or z)
+            if both or all(st is None or st.exact for st in (o, z)):
+                d = 0 if both else (o.step_ns if o else 0) - (z.step_ns if z else 0)
+                pred = segs[-1].offset_ns + d
+                n = int(round(pred / P - phase))
+                if abs((phase + n) * P - pred) < max(3e6, 5 * sigma):
+                    trig[a:b + 1] = np.where(_unfit(dev), -1, base - n)
+                    resid[a:b + 1] = dev
+                    what = "both clocks" if both else ("this clock" if o else "the ZED clock")
+                    segs.append(Segment(a, b, (phase + n) * P, unc,
+                                        f"continuity across a step of {d / 1e6 if not both else o.step_ns / 1e6:+.1f}"
+                                        f" ms ({what})", [round((phase + n) * P / 1e6, 3)]))
+                    continue
+        margin = max(1e6, 3 * sigma)
+        cands = [n for n in range(-1, MAX_PERIODS + 1) if (phase + n) * P >= -margin]
+        evidence = []
+        # trigger gaps: base indices missing in this segment that are anchors
+        gaps = _base_gaps(base, anchor_gap[a:b + 1] if anchor_gap is not None else None)
+        scores = {n: len([g for g in gaps if (g - n) in zmissing]) for n in cands}
+        need = 1 if counter is not None else MIN_ANCHORS_WITHOUT_COUNTER
+        ranked = sorted(scores.items(), key=lambda kv: -kv[1])
+        by_gaps = None
+        if ranked and ranked[0][1] >= need and (len(ranked) == 1 or ranked[1][1] == 0):
+            by_gaps = ranked[0][0]
+            n_anchor_total += ranked[0][1]
+        in_window = cands
+        if after_unknown_step is not None:
+            in_window = []
+        elif window_ms is not None:
+            lo, hi = window_ms[0] * 1e6 - 3 * unc - margin / 3, window_ms[1] * 1e6 + 3 * unc + margin / 3
+            in_window = [n for n in cands if lo <= (phase + n) * P <= hi]
+        cand_ms = [round((phase + n) * P / 1e6, 3) for n in cands if (phase + n) * P <= 4 * period_ns]
+        if by_gaps is not None:
+            n = by_gaps
+            evidence.append(f"trigger gaps ({scores[n]} common with the ZED"
+                            + (", classified by the frame counter" if counter is not None else "") + ")")
+            if window_ms is not None and n not in in_window:
+                evidence.append(f"outside the rig's stated latency {window_ms[0]:g}..{window_ms[1]:g} ms: "
+                                f"measure it and correct sync.stamp_latency_ms.{camera}")
+        elif len(in_window) == 1:
+            n = in_window[0]
+            evidence.append("causality + the rig's stated latency "
+                            f"(sync.stamp_latency_ms.{camera}: {window_ms[0]:g}..{window_ms[1]:g} ms)"
+                            if window_ms is not None else "causality")
+        else:
+            ms = ", ".join(f"{(phase + m) * P / 1e6:.1f}" for m in (in_window or cands)[:4])
+            missing = []
+            if after_unknown_step is not None:
+                missing.append(f"a clock stepped forward at stamp {after_unknown_step.at_ns} by "
+                               f"{after_unknown_step.step_ns / 1e6:+.1f} ms modulo one period (record the IMU "
+                               f"to size it)")
+            elif window_ms is None:
+                missing.append(f"no stated latency (sync.stamp_latency_ms.{camera})")
+            elif not in_window:
+                missing.append(f"no candidate inside the stated latency {window_ms[0]:g}..{window_ms[1]:g} ms "
+                               f"(sync.stamp_latency_ms.{camera})")
+            else:
+                missing.append(f"the stated latency {window_ms[0]:g}..{window_ms[1]:g} ms "
+                               f"(sync.stamp_latency_ms.{camera}) spans more than one trigger period")
+            missing.append(f"{'no' if not gaps else 'too few'} common trigger gaps"
+                           + ("" if counter is not None else " and no Boson frame counter (telemetry rows)"))
+            raise TriggerError(f"{where}{camera}: which trigger exposed frames {a}..{b} is ambiguous: offsets "
+                               f"{ms} ms after the ZED all fit; missing evidence: {'; '.join(missing)}")
+        trig[a:b + 1] = np.where(_unfit(dev), -1, base - n)
+        resid[a:b + 1] = dev
+        segs.append(Segment(a, b, (phase + n) * P, unc, "; ".join(evidence), cand_ms))
+    jit = float(np.std(resid)) if len(resid) > 2 else 0.0
+    return CameraTriggers(camera, trig, resid, segs, own, jit,
+                          host_drops=int(host_drop) if host_drop is not None else 0, anchors=n_anchor_total)
+
+
+def _unfit(dev: np.ndarray) -> np.ndarray:
+    """Frames too far from their segment's grid to be assigned (a step's frame on the wrong side): -1."""
+    mad = float(np.median(np.abs(dev - np.median(dev)))) * 1.4826 if len(dev) > 4 else 0.0
+    return np.abs(dev) > max(UNFIT_MIN_NS, 6 * mad)
+
+
+def _wrap(x: float, period: float) -> float:
+    return (x + period / 2) % period - period / 2
+
+
+def _classify_gaps(ts: np.ndarray, counter: np.ndarray | None, period_ns: float):
+    """(host drops counted, per frame: True when the gap before it is a missing trigger pulse).
+
+    Without a counter every gap may be either: (None, None)."""
+    if counter is None:
+        return None, None
+    c = counter.astype(np.int64)
+    dc = np.mod(np.diff(c), 1 << 32)
+    m = np.maximum(1, np.round(np.diff(ts.astype(np.int64)) / period_ns).astype(np.int64))
+    anchor = np.concatenate([[False], (m > 1) & (dc < m)])     # fewer pulses counted than periods passed
+    return int(np.sum(np.maximum(dc - 1, 0))), anchor
+
+
+def _base_gaps(base: np.ndarray, anchor: np.ndarray | None) -> list[int]:
+    """Base indices missing between consecutive frames (only the anchors', when they are known)."""
+    out = []
+    for i in range(1, len(base)):
+        if base[i] - base[i - 1] > 1 and (anchor is None or anchor[i]):
+            out += list(range(int(base[i - 1]) + 1, int(base[i])))
+    return out
