@@ -15,6 +15,7 @@ import yaml
 
 from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
 from platform_tools.rig import Rig
+from firmware import budget, privilege
 from firmware.context import L4T_RELEASES, build_context
 from firmware.launch_stub import ExecuteProcess, Node, load_launch_file
 
@@ -254,7 +255,7 @@ def _copy_sources(value: str) -> list[str]:
 
 def _base_ok(name: str, base: str, images: dict) -> str | None:
     """None when ``base`` is an image for the Orin's JetPack, else why not."""
-    repo, _, tag = base.partition(":")
+    repo, _, tag = base.split("@", 1)[0].partition(":")    # a digest (on_device.base_images) pins the tag
     release = images["release"]
     if repo.startswith("nvcr.io/nvidia/l4t-"):
         if not re.fullmatch(rf"{release}\.\d+(\.\d+)?", tag):
@@ -349,4 +350,5 @@ def run_checks(folder: Path, rig: Rig) -> list[Check]:
     folder = Path(folder).resolve()   # validators run inside the folder: no relative path may leak in
     return [check_compose_valid(folder), check_compose_matches_rig(folder, rig), check_shellcheck(folder),
             check_params(folder), check_launch(folder, rig), check_unit(folder, rig), check_udev(folder, rig),
-            check_dockerfiles(folder, rig)]
+            check_dockerfiles(folder, rig), *privilege.run(folder, rig), budget.check_budget(folder, rig),
+            budget.check_chunk_crcs(rig)]

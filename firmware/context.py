@@ -23,15 +23,32 @@ STOP_SLACK_S = 10.0
 #: depth needs them), its L4T version (the ZED SDK is built per L4T minor) and its Ubuntu release
 #: (which ROS 2 distributions have binary packages for it). JetPack 6.1 = L4T 36.4 on Ubuntu 22.04.
 L4T_RELEASES = {
-    "r36": {"base": "nvcr.io/nvidia/l4t-jetpack:r36.4.0", "l4t": "36.4", "jetpack": "6.1", "ubuntu": "jammy"},
+    "r36": {"base": "nvcr.io/nvidia/l4t-jetpack:r36.4.0", "l4t": "36.4", "l4t_revision": "4.4", "jetpack": "6.1",
+            "ubuntu": "jammy"},
 }
 #: ROS 2 distributions with arm64 binary packages on packages.ros.org, per Ubuntu release
 ROS_FOR_UBUNTU = {"jammy": ("humble", "iron"), "noble": ("jazzy",)}
 #: the ZED SDK major.minor for the L4T above, and the zed-ros2-wrapper release built against it
 #: (download.stereolabs.com/zedsdk/<sdk>/l4t<l4t>/jetsons; the wrapper tag must match the SDK: verify
 #: both exist before the first build on the Orin)
-ZED_SDK = "4.2"
-ZED_ROS2_WRAPPER_REF = "humble-v4.2.5"
+#: The released TartanRGBT workspace runs L4T R36.4.4 with ZED SDK 5.0.0 (upstream-tartanrgbt.md): the
+#: pairing known to work on this rig. The wrapper tag for SDK 5.0 is an assumption (doctor --bring-up).
+ZED_SDK = "5.0"
+ZED_ROS2_WRAPPER_REF = "humble-v5.0.0"
+#: the ROS 2 apt key (its fingerprint, not its file, is verified: on_device.downloads)
+ROS_APT_KEY_URL = "https://raw.githubusercontent.com/ros/rosdistro/master/ros.key"
+#: environment variable that limits DDS discovery to the host, per ROS distribution (humble has only
+#: ROS_LOCALHOST_ONLY; iron added ROS_AUTOMATIC_DISCOVERY_RANGE, jazzy deprecates the former)
+DISCOVERY_ENV = {
+    "humble": {"localhost": {"ROS_LOCALHOST_ONLY": "1"}, "subnet": {"ROS_LOCALHOST_ONLY": "0"}},
+    "iron": {"localhost": {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"},
+             "subnet": {"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}},
+    "jazzy": {"localhost": {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"},
+              "subnet": {"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}},
+}
+#: where SROS2 keys live on the host (bin/sros2-keys.sh writes them) and inside the containers
+KEYSTORE_DIR = "keystore"
+KEYSTORE_MOUNT = "/keystore"
 #: where the rendered folder keeps what the image builds need (compose.yaml's build contexts)
 DOCKER_DIR = "docker"
 #: this repository's installable source inside that folder (the thermal and tools images install it)
@@ -132,12 +149,46 @@ def images_context(rig: Rig) -> dict:
         if named and od.ros_distro not in named:
             raise ValueError(f"on_device.images.{name}: {tag!r} names ROS {named[0]}, on_device.ros_distro is "
                              f"{od.ros_distro}")
-    return {"tags": tags, "release": release, **l4t, "ros_distro": od.ros_distro,
+    digests = od.base_images
+    pinned = {"base": _pinned(l4t["base"], digests.l4t_jetpack_digest),
+              "ros_base": _pinned(f"ros:{od.ros_distro}-ros-base-{l4t['ubuntu']}", digests.ros_digest)}
+    return {"tags": tags, "release": release, **l4t, "ros_distro": od.ros_distro, "pinned": pinned,
+            "zed_sdk_sha256": od.downloads.zed_sdk_sha256 or "",
+            "ros_key_url": ROS_APT_KEY_URL, "ros_key_fingerprint": od.downloads.ros_apt_key_fingerprint,
             # the official ROS image (multi-arch: arm64) on the Ubuntu of this L4T, for the images without CUDA
             "ros_base": f"ros:{od.ros_distro}-ros-base-{l4t['ubuntu']}",
             "zed_sdk": ZED_SDK, "zed_wrapper_ref": ZED_ROS2_WRAPPER_REF,
             "dir": DOCKER_DIR, "source_dir": SOURCE_DIR,
             "dockerfiles": {name: f"{DOCKER_DIR}/{name}/Dockerfile" for name in tags}}
+
+
+def _pinned(ref: str, digest: str | None) -> str:
+    """An image reference pinned by digest when the rig holds one (repo:tag@sha256:...)."""
+    return f"{ref}@{digest}" if digest else ref
+
+
+def service_devices(rig: Rig) -> dict[str, list[str]]:
+    """Every device node each compose service gets ("host:container[:perms]"), and nothing more: the
+    Boson video node to its driver, the GPIO chips and the Bosons' serial ports to the recorder (record
+    button, pre-flight), the video nodes read-only to the health monitor (it checks they exist). The
+    ZED service has none listed: it is privileged (docs/on-device.md says why)."""
+    od = rig.desc.on_device
+    video = {side: device_paths(rig, side)["video"] for side in ("left", "right")}
+    serial = [device_paths(rig, side)["serial"] for side in ("left", "right")]
+    out = {f"thermal_{side}": [f"{v}:{v}"] for side, v in video.items()}
+    out["recorder"] = [f"{d}:{d}" for d in (*od.gpio_chips, *serial)]
+    out["health"] = [f"{v}:{v}:r" for v in video.values()]
+    return out
+
+
+def ros_env(rig: Rig) -> dict[str, str]:
+    """The ROS 2 environment every ROS container shares: domain, discovery range, SROS2."""
+    od = rig.desc.on_device
+    env = {"ROS_DOMAIN_ID": str(od.ros_domain_id), **DISCOVERY_ENV[od.ros_distro][od.dds_discovery]}
+    if od.sros2_enclaves:
+        env |= {"ROS_SECURITY_KEYSTORE": KEYSTORE_MOUNT, "ROS_SECURITY_ENABLE": "true",
+                "ROS_SECURITY_STRATEGY": "Enforce"}
+    return env
 
 
 def build_context(rig: Rig) -> dict:
@@ -160,6 +211,7 @@ def build_context(rig: Rig) -> dict:
             "fps": int(round(zed_model.fps)),
             "downscale": od.zed_pub_downscale_factor,
             "depth_mode": od.zed_depth_mode,
+            "depth_openni": od.zed_depth_openni,
         },
         "thermal": [thermal_context(rig, "left"), thermal_context(rig, "right")],
         "boson_vid": vid,
@@ -172,4 +224,9 @@ def build_context(rig: Rig) -> dict:
         "cache_bytes": rec.cache_mb * 1024 * 1024,
         "config_dir": f"{od.install_dir}/config",
         "images": images_context(rig),
+        "devices": service_devices(rig),
+        "ros_env": ros_env(rig),
+        "uid": od.container_uid,
+        "keystore": {"dir": KEYSTORE_DIR, "mount": KEYSTORE_MOUNT, "enabled": od.sros2_enclaves,
+                     "enclaves": ["/rgbt/zed", "/rgbt/thermal_left", "/rgbt/thermal_right", "/rgbt/recorder"]},
     }

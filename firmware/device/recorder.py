@@ -31,6 +31,7 @@ from firmware.device.button import Button, Press
 from firmware.device.gpio import Gpio
 from firmware.device.preflight import Report
 from firmware.device.storage import GB, DiskWatchdog
+from firmware.device.topics import recorded_topics
 
 log = logging.getLogger("platform_tools.recorder")
 
@@ -132,8 +133,7 @@ class Recorder:
 
     def _bag_spec(self, folder: Path) -> BagSpec:
         rec = self.rig.desc.recording
-        topics = self.rig.desc.on_device.topics
-        return BagSpec(folder / BAG_DIR, tuple(getattr(topics, f) for f in topics.__dataclass_fields__),
+        return BagSpec(folder / BAG_DIR, recorded_topics(self.rig),
                        rec.compression_preset, int(rec.split_size_gb * 1e9), int(rec.split_duration_s),
                        rec.cache_mb * 1024 * 1024)
 
@@ -206,7 +206,7 @@ class Recorder:
         for path in sorted(session.bag.glob("*.mcap")) if session.bag.is_dir() else []:
             if mcapcheck.is_recovered_copy(path):
                 continue
-            status = mcapcheck.check(path)
+            status = mcapcheck.check_crcs(path)   # the summary and each chunk's CRC, no message parsed
             entry = {"file": str(path.relative_to(session.folder)), "size_bytes": path.stat().st_size,
                      **{k: v for k, v in status.to_dict().items() if k != "path"}}
             if not status.ok:

@@ -333,6 +333,9 @@ class Recording:
     min_free_gb: Annotated[float, Ge(0)]
     stop_grace_s: Annotated[float, Gt(0)]
     button: RecordButton
+    #: what the data drive sustains for rosbag2 (reported 110-120 MB/s, platform.md); `firmware check`
+    #: fails when the recorded topics' rate computed from the rig exceeds it
+    write_budget_mb_per_s: Annotated[float, Gt(0)]
 
 
 @dataclass(frozen=True)
@@ -400,6 +403,25 @@ class Images:
 
 
 @dataclass(frozen=True)
+class Downloads:
+    """What the image builds download, and how each download is verified."""
+    #: sha256 of the ZED SDK installer (download.stereolabs.com); null until someone with network
+    #: hashes the installer (docs/on-device.md): the zed image build refuses to run without it
+    zed_sdk_sha256: Optional[str]
+    #: the OpenPGP fingerprint of the ROS 2 apt key (the key file changes when its expiry is extended;
+    #: the fingerprint does not)
+    ros_apt_key_fingerprint: str
+
+
+@dataclass(frozen=True)
+class BaseImages:
+    """Digests (sha256:...) of the base images the Dockerfiles start from; null: pinned by tag only
+    until someone with network reads them (docs/on-device.md)."""
+    l4t_jetpack_digest: Optional[str]
+    ros_digest: Optional[str]
+
+
+@dataclass(frozen=True)
 class Watchdog:
     #: stop the recording cleanly when the data drive has less than this free
     stop_free_gb: Annotated[float, Ge(0)]
@@ -412,7 +434,18 @@ class OnDevice:
     install_dir: str
     compose_project: str
     ros_distro: Literal["humble", "iron", "jazzy"]
+    #: 0 is the domain every ROS 2 machine joins by default: `firmware check` fails on it
     ros_domain_id: Annotated[int, Ge(0), Le(232)]
+    #: localhost: DDS discovers and talks only on the Orin; subnet: also to peers on its networks (Wi-Fi)
+    dds_discovery: Literal["localhost", "subnet"]
+    #: SROS2: every node in its enclave, keys from `bin/sros2-keys.sh` (Enforce strategy)
+    sros2_enclaves: bool
+    #: compose services allowed privileged mode and host pid (the ZED X: docs/on-device.md says why)
+    privileged_services: tuple[str, ...]
+    #: the unprivileged user the thermal and health containers run as
+    container_uid: Annotated[int, Gt(0)]
+    downloads: Downloads
+    base_images: BaseImages
     images: Images
     topics: Topics
     #: zed-ros2-wrapper camera_name (its node namespace)
@@ -420,6 +453,8 @@ class OnDevice:
     #: zed-ros2-wrapper general.pub_downscale_factor: raw HD1200 stereo is beyond what rosbag2 writes
     zed_pub_downscale_factor: Annotated[float, Ge(1)]
     zed_depth_mode: Literal["NONE", "PERFORMANCE", "QUALITY", "ULTRA", "NEURAL"]
+    #: zed-ros2-wrapper depth.openni_depth_mode: depth as 16-bit millimetres instead of 32-bit metres
+    zed_depth_openni: bool
     #: Boson telemetry rows appended to each frame (640x512 becomes 640x514)
     thermal_telemetry_rows: Annotated[int, Ge(0)]
     gpio_chips: tuple[str, ...]
