@@ -41,8 +41,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--square", required=True, type=float, metavar="METRES", help="square size in metres")
     p.add_argument("--out", required=True, type=Path, metavar="DIR", help="output folder (replaced whole)")
     p.add_argument("--lens-model", default=None, metavar="M",
-                   help="opencv8 (default: right for a 95 deg lens, readable by ROS/OpenCV), splined, or a "
-                        "full mrcal LENSMODEL_* name (--solver mrcal only)")
+                   help="default: chosen by the data (OPENCV8 unless it has a pole or fold inside the image, then "
+                        "OpenCV's Kannala-Brandt); or opencv8, splined, or a full mrcal LENSMODEL_* name "
+                        "(--solver mrcal only)")
     p.add_argument("--solver", choices=("mrcal", "opencv"), default="mrcal",
                    help="mrcal (default; gives projection uncertainty) or opencv (cv2.fisheye, Kannala-Brandt)")
     p.add_argument("--exit-zero", action="store_true",
@@ -66,6 +67,17 @@ def _check_square(square: float) -> float:
     return square
 
 
+def nominal_corner_angle_deg(rig) -> float:
+    """The off-axis angle at which the rig's nominal thermal lens (its focal length and HFoV, through the
+    synthetic lens made from them) sees the image corners: every exported model must stay monotonic to it."""
+    from calibration.formats.conversions import corner_angle_deg
+    from calibration.synth.lens import nominal_thermal_lens
+    try:
+        return corner_angle_deg(nominal_thermal_lens(rig))
+    except (KeyError, ValueError):
+        return 0.0      # no fisheye profile fits this rig's thermal lens: the model's own field is used
+
+
 def cmd_thermal(args: argparse.Namespace) -> int:
     from calibration.thermal.pipeline import calibrate
     rig = rig_from_args(args)
@@ -75,7 +87,8 @@ def cmd_thermal(args: argparse.Namespace) -> int:
     obs, solution, out = calibrate(args.images, board, square, solver=args.solver, lens_model=args.lens_model,
                                    focal_px=rig.focal_px(spec), expected_size=(spec.width_px, spec.height_px),
                                    camera_name=args.camera_name, rig_hash=rig.hash,
-                                   show_solver_output=args.verbose)
+                                   show_solver_output=args.verbose,
+                                   nominal_corner_angle_deg=nominal_corner_angle_deg(rig))
     with atomic.OutputDir(args.out) as stage:
         for name, text in out.files.items():
             (stage / name).write_text(text)

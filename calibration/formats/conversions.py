@@ -105,16 +105,39 @@ def representation(lens, family: str) -> Representation:
     return Representation(family, _K(f.intrinsics), f.intrinsics[4:], f, lensmodel)
 
 
-def nearest_for_ros(lens) -> Representation:
-    """The ROS distortion model matching the lens: exact where one exists (OPENCV4/5 -> plumb_bob,
-    OPENCV8 -> rational_polynomial, Kannala-Brandt -> equidistant), else the better of the
-    rational_polynomial and equidistant fits."""
+# Beyond this off-axis angle at the image corners a lens is a fisheye for ROS: image_geometry unprojects a
+# plumb_bob / rational_polynomial camera with cv::undistortPoints' default 5 iterations, which leaves a
+# healthy 95 deg rational lens (corners at 58 deg) 3.2 px wrong in the image corners (measured on the
+# synthetic lens, tests/calibration/test_formats.py), while its equidistant path inverts exactly.
+ROS_FISHEYE_CORNER_DEG = 45.0
+
+
+def corner_angle_deg(lens) -> float:
+    """The largest off-axis angle (deg) at which ``lens`` sees one of the imager's four corner pixels."""
+    from calibration.lens.health import off_axis_deg
+    w, h = imagersize(lens)
+    q = np.array([[0.0, 0.0], [w - 1.0, 0.0], [0.0, h - 1.0], [w - 1.0, h - 1.0]])
+    return float(np.nanmax(off_axis_deg(unprojector(lens)(q))))
+
+
+def exact_or_nearest(lens) -> Representation:
+    """The lens in the OpenCV model it is (OPENCV4/5 -> plumb_bob, OPENCV8 -> rational_polynomial,
+    Kannala-Brandt -> equidistant), else the better of the rational_polynomial and equidistant fits."""
     for family in ("plumb_bob", "rational_polynomial", "equidistant"):
         exact = _exact(lens, family)
         if exact is not None:
             return exact
     fits = [representation(lens, f) for f in ("rational_polynomial", "equidistant")]
     return min(fits, key=lambda r: r.fit.rms_px)
+
+
+def nearest_for_ros(lens) -> Representation:
+    """The ROS distortion model for the lens: ``equidistant`` (exact for Kannala-Brandt, fitted else) for a
+    lens wider than ROS_FISHEYE_CORNER_DEG at the image corners (the Boson's 95 deg lens), else
+    :func:`exact_or_nearest`."""
+    if corner_angle_deg(lens) > ROS_FISHEYE_CORNER_DEG:
+        return representation(lens, "equidistant")
+    return exact_or_nearest(lens)
 
 
 def nearest_kalibr(lens) -> Representation:

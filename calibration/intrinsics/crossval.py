@@ -28,6 +28,11 @@ GRID_WIDTH = 32          # the validity grid: 32 x 26 points over a 640 x 512 im
 FIT_FRACTION = 0.5       # the rotation between the halves is fitted over the central half
 
 
+class CrossValidationError(Exception):
+    """A half could not be solved or compared on this data (a real-data failure, not a bug to show as a
+    traceback); ``str()`` says which half and what failed, in one line."""
+
+
 @dataclass(frozen=True)
 class CrossValidation:
     grid: np.ndarray             # (Ny, Nx, 2) pixels
@@ -83,9 +88,16 @@ def cross_validate(solution: Solution, *, grid_width: int = GRID_WIDTH) -> Cross
     if min(len(a), len(b)) < MIN_IMAGES:
         return None
     half = _opencv_half if solution.solver == "opencv" else _mrcal_half
-    proj_a, unproj_a = half(solution, a)
-    proj_b, _ = half(solution, b)
-    c = compare(proj_b, unproj_a, solution.imagersize, grid_width=grid_width, fit_fraction=FIT_FRACTION)
+    stage = "the first half's solve"
+    try:
+        proj_a, unproj_a = half(solution, a)
+        stage = "the second half's solve"
+        proj_b, _ = half(solution, b)
+        stage = "comparing the two halves"
+        c = compare(proj_b, unproj_a, solution.imagersize, grid_width=grid_width, fit_fraction=FIT_FRACTION)
+    except Exception as exc:      # noqa: BLE001 - mrcal, OpenCV and scipy raise plain errors on real data
+        detail = " ".join(str(exc).split())[:160] or type(exc).__name__
+        raise CrossValidationError(f"{stage} ({len(a)} and {len(b)} images) failed: {detail}") from None
     names = solution.observations.names
     d = np.where(np.isfinite(c.diff_px), c.diff_px, np.inf)
     fin = d[np.isfinite(d)]

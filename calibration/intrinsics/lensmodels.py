@@ -6,6 +6,8 @@ GRAPHIC_order=3_Nx=..``). The default for the Boson's 95 deg lens is OPENCV8: it
 a 95 deg lens to a few hundredths of a pixel where there is data, stay well-behaved with 20-40
 boards, and map one-to-one onto ROS ``rational_polynomial`` and OpenCV's rational model. A splined
 model follows any lens exactly but needs boards in every part of the image, and no other tool reads it.
+Without ``--lens-model`` the pipeline keeps OPENCV8 only when it has no pole or fold inside the image
+(calibration/thermal/pipeline.py, calibration/lens/health.py), else it uses OpenCV's Kannala-Brandt.
 """
 from __future__ import annotations
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from calibration.lens import health
 from calibration.lens.fit import fit_lensmodel, mrcal_unprojector
 from calibration.lens.radial import opencv8_from_stereographic
 
@@ -285,6 +286,12 @@ def _unregularised(oi: dict) -> tuple[dict, str]:
             and rms <= 1.05 * rms0 + 1e-6):
         return oi, (f"unregularised polish rejected (RMS {rms:.3f} vs {rms0:.3f} px, largest term "
                     f"{np.max(np.abs(d)):.3g}); regularised model kept: it may be biased where data is thin")
+    polished = health.check_mrcal(trial["lensmodel"], trial["intrinsics"][0], tuple(trial["imagersizes"][0]))
+    if not polished.ok:
+        kept = health.check_mrcal(oi["lensmodel"], oi["intrinsics"][0], tuple(oi["imagersizes"][0]))
+        if kept.ok:
+            return oi, (f"unregularised polish rejected: {polished.problem()}; regularised model kept: it may be "
+                        f"biased where data is thin")
     note = "final solve without mrcal's regularisation (it biases a 95 deg OPENCV8 fit where data is thin)"
     if not _uncertainty_defined(trial):
         # the unregularised problem is singular (the rational terms' near-degeneracy): mrcal cannot

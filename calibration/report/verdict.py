@@ -105,11 +105,14 @@ def _listed(parts: list[str], n: int = 2) -> str:
 
 def judge(*, region_counts: dict[str, int], rms_px: float, n_images: int, n_rejected_images: int,
           uncertainty_central_px: float | None, uncertainty_max_px: float | None,
-          validity=None, cross_validated: bool | None = None) -> Verdict:
+          validity=None, cross_validated: bool | None = None, lens_problems: list[str] | None = None,
+          cross_validation_error: str | None = None) -> Verdict:
     """``validity``: a report.validity.Validity (the trust map), which replaces the whole-image
     uncertainty limit with one per place and makes ``trusted-within-region`` possible (without it a
     model is trusted over the whole image or not at all); ``cross_validated`` False: there were too
-    few images to cross-validate (itself a reason not to trust)."""
+    few images to cross-validate (itself a reason not to trust); ``lens_problems``: one line per exported
+    model with a pole or fold inside the image or that does not round-trip (thermal/lens_check.py), each
+    disqualifying; ``cross_validation_error``: the cross-validation could not run on this data (why)."""
     bad: list[str] = []          # disqualifying
     limit: list[str] = []        # not the whole image (with a trust map: trusted within its region)
     short: list[str] = []        # the same, briefly, for the headline
@@ -138,6 +141,11 @@ def judge(*, region_counts: dict[str, int], rms_px: float, n_images: int, n_reje
         if validity is None and uncertainty_max_px is not None and uncertainty_max_px > MAX_UNCERTAINTY_PX:
             add(f"projection uncertainty up to {uncertainty_max_px:.2f} px near the image "
                 f"edges (limit {MAX_UNCERTAINTY_PX} px)", True)
+    for text in lens_problems or []:
+        add(text, True)
+    if cross_validation_error:
+        add(f"cross-validation failed: {cross_validation_error}; nothing says where the model holds: take "
+            f"more images, with the board in every part of the image", True)
     if cross_validated is False:
         add(f"too few images ({n_images}) to cross-validate: take at least 8, with the board "
             f"in every part of the image", True)

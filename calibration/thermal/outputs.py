@@ -17,6 +17,7 @@ from calibration.intrinsics import crossval
 from calibration.lens import kannala_brandt as kb
 from calibration.lens.fit import imager_grid
 from calibration.intrinsics.mrcal_solver import Solution
+from calibration.thermal import lens_check
 
 
 @dataclass
@@ -42,10 +43,13 @@ def _cameramodel_text(model, note: str):
 
 
 def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: str,
-          cross_validate: bool = True) -> Outputs:
+          cross_validate: bool = True, nominal_corner_angle_deg: float = 0.0) -> Outputs:
+    """``nominal_corner_angle_deg``: the angle the rig's nominal lens sees the image corners at; every
+    exported model must stay radially monotonic out to it (and to the widest board corner seen)."""
     lens = kb.KannalaBrandt(solution.intrinsics, solution.imagersize) if solution.lensmodel == kb.NAME else \
         camera_model(solution.lensmodel, solution.intrinsics, solution.imagersize)
     ros = formats.nearest_for_ros(lens)
+    ocv = formats.exact_or_nearest(lens)
     kal = formats.nearest_kalibr(lens)
     rational = formats.representation(lens, "rational_polynomial") if solution.lensmodel == kb.NAME else None
     note = (f"thermal intrinsics from calibrate thermal ({solution.solver}, {solution.lensmodel}), "
@@ -61,20 +65,36 @@ def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: s
     obs = solution.observations
     cov = analysis.coverage(obs.corners, solution.inlier, solution.imagersize)
     unc = analysis.uncertainty(model, n_width=crossval.GRID_WIDTH) if solution.optimization_inputs else None
-    cv = crossval.cross_validate(solution) if cross_validate else None
+    cv = cv_error = None
+    if cross_validate:
+        try:
+            cv = crossval.cross_validate(solution)
+        except crossval.CrossValidationError as exc:
+            cv_error = str(exc)
     grid = imager_grid(solution.imagersize, crossval.GRID_WIDTH)
     val = validity(grid, cov.points, solution.imagersize,
                    halves_diff_px=None if cv is None else cv.diff_px,
                    uncertainty_px=None if unc is None else unc.stdev_px)
     model.valid_intrinsics_region(val.region if len(val.region) >= 4 else np.zeros((0, 2)))
     cm_text = _cameramodel_text(model, note)
+    files = {
+        "thermal.cameramodel": cm_text,
+        "thermal_opencv.yaml": formats.opencv_yaml(ocv, solution.imagersize, camera_name=camera_name,
+                                                   rms_px=solution.rms_px),
+        "thermal_camera_info.yaml": formats.ros_camera_info(ros, solution.imagersize, camera_name=camera_name),
+        "kalibr_camchain.yaml": formats.kalibr_camchain(kal, solution.imagersize,
+                                                        rostopic=f"/{camera_name}/image_raw"),
+        "corners.vnl": corners_vnl,
+    }
+    lens_health = lens_check.exported_health(files, solution, min_corner_angle_deg=nominal_corner_angle_deg)
     verdict = judge(region_counts=cov.region_counts(), rms_px=solution.rms_px, n_images=obs.n,
                     n_rejected_images=len(solution.rejected_images),
                     uncertainty_central_px=None if unc is None else unc.central_max_px,
                     uncertainty_max_px=None if unc is None else unc.max_px,
-                    validity=val, cross_validated=None if not cross_validate else cv is not None)
+                    validity=val, cross_validated=None if not cross_validate or cv_error else cv is not None,
+                    lens_problems=lens_check.problems(lens_health), cross_validation_error=cv_error)
     fmt = {"ROS camera_info": ros.summary(), "Kalibr camchain": kal.summary(),
-           "OpenCV YAML": ros.summary()}
+           "OpenCV YAML": ocv.summary()}
     if rational is not None:
         fmt["thermal.cameramodel"] = rational.summary()
     summary = dict(
@@ -92,16 +112,8 @@ def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: s
         regions=cov.region_counts(),
         uncertainty=None if unc is None else dict(central_max_px=unc.central_max_px, max_px=unc.max_px,
                                                   observed_noise_px=unc.observed_noise_px),
-        cross_validation=None if cv is None else cv.summary(), validity=val.summary(),
+        cross_validation=None if cv is None else cv.summary(), cross_validation_error=cv_error,
+        validity=val.summary(), lens_health={name: h.summary() for name, h in lens_health.items()},
         formats=fmt, notes=list(solution.notes), rig_hash=rig_hash, verdict=verdict.to_dict())
-    files = {
-        "thermal.cameramodel": cm_text,
-        "thermal_opencv.yaml": formats.opencv_yaml(ros, solution.imagersize, camera_name=camera_name,
-                                                   rms_px=solution.rms_px),
-        "thermal_camera_info.yaml": formats.ros_camera_info(ros, solution.imagersize, camera_name=camera_name),
-        "kalibr_camchain.yaml": formats.kalibr_camchain(kal, solution.imagersize,
-                                                        rostopic=f"/{camera_name}/image_raw"),
-        "corners.vnl": corners_vnl,
-        "report.html": html.render(summary, verdict, html.plots(solution, cov, unc, cv, val)),
-    }
+    files["report.html"] = html.render(summary, verdict, html.plots(solution, cov, unc, cv, val))
     return Outputs(files, summary, verdict)

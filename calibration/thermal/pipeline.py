@@ -76,18 +76,43 @@ def detect(images: str, board: tuple[int, int], square_m: float) -> tuple[BoardO
     return obs, format_corners(rows)
 
 
-def solve(obs: BoardObservations, *, solver: str, lens_model: str | None, focal_px: float):
+def solve(obs: BoardObservations, *, solver: str, lens_model: str | None, focal_px: float,
+          nominal_corner_angle_deg: float = 0.0):
     """The lens from the observations: ``solver`` "mrcal" (``lens_model`` a name lensmodels.resolve
-    accepts, None for OPENCV8) or "opencv" (cv2.fisheye); ``focal_px`` the nominal focal length, the seed.
-    Returns an :class:`~calibration.intrinsics.mrcal_solver.Solution`."""
+    accepts, None: chosen by the data, below) or "opencv" (cv2.fisheye); ``focal_px`` the nominal focal
+    length, the seed. Returns an :class:`~calibration.intrinsics.mrcal_solver.Solution`.
+
+    The default (``lens_model`` None, mrcal) is OPENCV8 when the solved lens has no pole or fold out to
+    the image corners' angle (the widest of its own, the data's and ``nominal_corner_angle_deg``) and
+    round-trips over the whole image (thermal/lens_check.py); when it does not, OpenCV's Kannala-Brandt
+    fisheye (no rational denominator to reach zero) on the same corners, if that one holds; the note
+    says which and why."""
     from calibration.intrinsics import SolveError, mrcal_solver, opencv_solver
     from calibration.intrinsics.lensmodels import LensModelError
+    from calibration.thermal.lens_check import solution_health
     try:
         if solver == "opencv":
             if lens_model is not None:
                 raise UserError("--lens-model applies to --solver mrcal only (OpenCV's fisheye is Kannala-Brandt)")
             return opencv_solver.solve(obs, focal_px=focal_px)
-        return mrcal_solver.solve(obs, lensmodel=lens_model, focal_px=focal_px)
+        solution = mrcal_solver.solve(obs, lensmodel=lens_model, focal_px=focal_px)
+        if lens_model is not None:
+            return solution
+        h = solution_health(solution, min_corner_angle_deg=nominal_corner_angle_deg)
+        if h.ok:
+            solution.notes.append("lens model chosen by the data: OPENCV8 (no pole or fold out to "
+                                  f"{h.corner_angle_deg:.1f} deg, round trip within {h.round_trip_max_px:.1g} px)")
+            return solution
+        try:
+            alt = opencv_solver.solve(obs, focal_px=focal_px)
+        except SolveError:
+            return solution
+        h_alt = solution_health(alt, min_corner_angle_deg=nominal_corner_angle_deg)
+        if not h_alt.ok:
+            return solution            # the verdict names what is wrong with it
+        alt.notes.append(f"lens model chosen by the data: Kannala-Brandt (OpenCV fisheye), because OPENCV8 "
+                         f"is unusable here: {h.problem()}")
+        return alt
     except LensModelError as exc:
         raise UserError(str(exc)) from None
     except SolveError as exc:
@@ -96,18 +121,22 @@ def solve(obs: BoardObservations, *, solver: str, lens_model: str | None, focal_
 
 def calibrate(images: str, board: tuple[int, int], square_m: float, *, solver: str, lens_model: str | None,
               focal_px: float, expected_size: tuple[int, int], camera_name: str, rig_hash: str,
-              show_solver_output: bool = False):
+              show_solver_output: bool = False, nominal_corner_angle_deg: float = 0.0):
     """The whole pipeline: (the observations detected, the solution, its
     :class:`~calibration.thermal.outputs.Outputs`; the solution holds the observations it kept after
     rejecting images). ``expected_size``:
     the rig description's thermal imager (W, H) px, warned about when the images differ;
-    ``show_solver_output``: let mrcal's C-level progress lines through to stderr."""
+    ``show_solver_output``: let mrcal's C-level progress lines through to stderr;
+    ``nominal_corner_angle_deg``: the angle the rig's nominal lens sees the image corners at (lens_check.py)."""
     check_lens_model(lens_model, expected_size)
     obs, corners_text = detect(images, board, square_m)
     if obs.imagersize != tuple(expected_size):
-        log.warning("images are %dx%d, the rig description's thermal camera is %dx%d",
-                    *obs.imagersize, *expected_size)
+        log.warning("images are %dx%d, the rig description's thermal camera is %dx%d (its nominal lens's "
+                    "field is not used to check the model)", *obs.imagersize, *expected_size)
+        nominal_corner_angle_deg = 0.0
     with quiet_stderr(enabled=not show_solver_output):
-        solution = solve(obs, solver=solver, lens_model=lens_model, focal_px=focal_px)
-        out: Outputs = build(solution, camera_name=camera_name, rig_hash=rig_hash, corners_vnl=corners_text)
+        solution = solve(obs, solver=solver, lens_model=lens_model, focal_px=focal_px,
+                         nominal_corner_angle_deg=nominal_corner_angle_deg)
+        out: Outputs = build(solution, camera_name=camera_name, rig_hash=rig_hash, corners_vnl=corners_text,
+                             nominal_corner_angle_deg=nominal_corner_angle_deg)
     return obs, solution, out

@@ -21,26 +21,43 @@ def rays(n=200, seed=0):
     return q
 
 
-def test_opencv8_to_ros_rational_polynomial_is_exact_and_projects_like_mrcal(tmp_path):
+def test_opencv8_is_exact_in_opencv_yaml_and_projects_like_mrcal(tmp_path):
     lm, intr = fisheye_truth(408.3, SIZE)
     lens = camera_model(lm, intr, SIZE)
-    rep = formats.nearest_for_ros(lens)
+    rep = formats.exact_or_nearest(lens)
     assert rep.family == "rational_polynomial" and rep.exact
-    doc = yaml.safe_load(formats.ros_camera_info(rep, SIZE, camera_name="thermal"))
-    assert doc["distortion_model"] == "rational_polynomial" and doc["image_width"] == 640
-    K = np.array(doc["camera_matrix"]["data"]).reshape(3, 3)
-    D = np.array(doc["distortion_coefficients"]["data"])
-    assert len(D) == 8 and len(doc["projection_matrix"]["data"]) == 12
-    v = mrcal.unproject(rays(), lm, intr)
-    q_cv, _ = cv2.projectPoints(v, np.zeros(3), np.zeros(3), K, D)
-    np.testing.assert_allclose(q_cv[:, 0], mrcal.project(v, lm, intr), atol=1e-6)
-    # OpenCV YAML read back by cv2.FileStorage
     p = tmp_path / "c.yaml"
     p.write_text(formats.opencv_yaml(rep, SIZE, camera_name="thermal", rms_px=0.1))
     fs = cv2.FileStorage(str(p), cv2.FILE_STORAGE_READ)
-    np.testing.assert_allclose(fs.getNode("camera_matrix").mat(), K)
-    np.testing.assert_allclose(fs.getNode("distortion_coefficients").mat().ravel(), D)
-    assert fs.getNode("distortion_model").string() == "rational_polynomial"
+    K, D = fs.getNode("camera_matrix").mat(), fs.getNode("distortion_coefficients").mat().ravel()
+    assert fs.getNode("distortion_model").string() == "rational_polynomial" and len(D) == 8
+    v = mrcal.unproject(rays(), lm, intr)
+    q_cv, _ = cv2.projectPoints(v, np.zeros(3), np.zeros(3), K, D)
+    np.testing.assert_allclose(q_cv[:, 0], mrcal.project(v, lm, intr), atol=1e-6)
+
+
+def test_a_95_deg_lens_goes_to_ros_as_equidistant_and_image_geometry_default_inversion_is_why(tmp_path):
+    """ROS image_geometry inverts plumb_bob / rational_polynomial with cv::undistortPoints' default 5
+    iterations: on the healthy 95 deg synthetic lens that is px off in the corners, so the ROS file is
+    equidistant, fitted, with its error in the first line, and cv2.fisheye reads it back exactly."""
+    lm, intr = fisheye_truth(408.3, SIZE)
+    lens = camera_model(lm, intr, SIZE)
+    K = np.array([[intr[0], 0, intr[2]], [0, intr[1], intr[3]], [0, 0, 1]])
+    corner = np.array([[[0.0, 0.0]]])
+    x = cv2.undistortPoints(corner, K, np.array(intr[4:]))[0, 0]
+    back = mrcal.project(np.array([x[0], x[1], 1.0]), lm, intr)
+    assert np.linalg.norm(back - corner[0, 0]) > 1.0          # the default inversion, 1+ px off
+    rep = formats.nearest_for_ros(lens)
+    assert rep.family == "equidistant" and not rep.exact and rep.fit.max_px < 0.01
+    text = formats.ros_camera_info(rep, SIZE, camera_name="thermal")
+    doc = yaml.safe_load(text)
+    assert doc["distortion_model"] == "equidistant" and len(doc["distortion_coefficients"]["data"]) == 4
+    assert "fitted" in text.splitlines()[0]
+    K2 = np.array(doc["camera_matrix"]["data"]).reshape(3, 3)
+    D2 = np.array(doc["distortion_coefficients"]["data"])
+    v = mrcal.unproject(rays(), lm, intr)
+    q, _ = cv2.fisheye.projectPoints(v[None], np.zeros(3), np.zeros(3), K2, D2)
+    assert np.abs(q[0] - mrcal.project(v, lm, intr)).max() < 0.01
 
 
 def test_kannala_brandt_exports_exactly_as_fisheye_and_equidistant(tmp_path):

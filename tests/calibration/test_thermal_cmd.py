@@ -73,7 +73,13 @@ def test_calibrate_validate_end_to_end_and_wrong_board(synth_set, tmp_path, caps
     assert m.optimization_inputs() is not None and m.intrinsics()[0] == "LENSMODEL_OPENCV8"
     assert m.valid_intrinsics_region() is not None          # where cross-validation trusts it
     assert summary["cross_validation"] is not None and 0 <= summary["validity"]["trusted_share"] <= 1
-    assert yaml.safe_load((out / "thermal_camera_info.yaml").read_text())["distortion_model"] == "rational_polynomial"
+    # a 95 deg lens goes to ROS as equidistant (image_geometry inverts it exactly; see test_formats.py)
+    assert yaml.safe_load((out / "thermal_camera_info.yaml").read_text())["distortion_model"] == "equidistant"
+    # every exported file was read back by its own tool and checked over the whole image
+    assert set(summary["lens_health"]) == {"thermal.cameramodel", "thermal_opencv.yaml",
+                                           "thermal_camera_info.yaml", "kalibr_camchain.yaml"}
+    assert all(h["ok"] for h in summary["lens_health"].values()), summary["lens_health"]
+    assert any("lens model chosen by the data: OPENCV8" in n for n in summary["notes"]), summary["notes"]
     assert (out / "corners.vnl").read_text().startswith("# filename x y level")
     assert summary["n_images_used"] >= 10
 
