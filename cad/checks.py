@@ -342,8 +342,50 @@ def check_estimates(asm: Assembly) -> CheckResult:
                        [f"{e.path} = {e.value:g}" + (f" ({e.note})" if e.note else "") for e in est])
 
 
-CHECKS = [check_valid, check_interference, check_min_wall, check_clearances, check_bed, check_fov, check_battery,
-          check_vents, check_mass, check_estimates]
+def printed_meshes(asm: Assembly, tolerance: float = 0.1, angular: float = 0.2) -> dict[str, np.ndarray]:
+    """Every printed part in its print orientation as the STL triangles an export writes, read back
+    from the file (the mesh a slicer gets, not the B-rep)."""
+    import tempfile
+    from pathlib import Path
+    from .printability import read_stl
+    bed = asm.rig.desc.printing.printer.bed_mm
+    out = {}
+    with tempfile.TemporaryDirectory(prefix="rig-printable-") as tmp:
+        for pid, n in asm.printed().items():
+            if n.category != "printed" or pid not in PRINT_SETUPS:
+                continue
+            shape, _ = on_bed(n.local_shape(asm.cache), PRINT_SETUPS[pid], bed)
+            path = Path(tmp) / f"{pid}.stl"
+            cq.exporters.export(shape, str(path), "STL", tolerance=tolerance, angularTolerance=angular)
+            out[pid] = read_stl(path)
+    return out
+
+
+def check_printable(asm: Assembly, meshes: dict[str, np.ndarray] | None = None) -> CheckResult:
+    """No support needed: on every printed part's exported mesh, in its print orientation, every face
+    overhanging more than ``max_overhang_deg`` is a bridge from supported edges of at most
+    ``max_bridge_mm`` (cad/printability.py says how that is measured)."""
+    from .printability import analyse
+    p = asm.rig.desc.printing.printer
+    meshes = printed_meshes(asm) if meshes is None else meshes
+    details, bad, data = [], 0, {}
+    for pid, tri in meshes.items():
+        r = analyse(tri, p.max_overhang_deg, p.max_bridge_mm)
+        data[pid] = dict(bed_contact_mm2=r.bed_contact_mm2, overhang_mm2=r.overhang_mm2,
+                         failing=[g.describe() for g in r.failing])
+        worst = max((g.span_mm for g in r.regions if g.ok and g.area_mm2 >= 0.5), default=0.0)
+        details.append(f"{pid}: {'ok' if r.ok else 'NEEDS SUPPORT'}; on the bed {r.bed_contact_mm2:.0f} mm^2, "
+                       f"{len(r.regions)} overhanging patches ({r.overhang_mm2:.0f} mm^2), longest bridge {worst:.1f} mm")
+        for g in r.failing:
+            bad += 1
+            details.append(f"  {pid}: {g.describe()}")
+    return CheckResult("printable without supports", bad == 0,
+                       f"{len(meshes)} printed parts, {bad} patches overhanging more than {p.max_overhang_deg:g} deg "
+                       f"or bridging more than {p.max_bridge_mm:g} mm", details, data)
+
+
+CHECKS = [check_valid, check_interference, check_min_wall, check_clearances, check_bed, check_printable, check_fov,
+          check_battery, check_vents, check_mass, check_estimates]
 
 
 def run_checks(asm: Assembly) -> list[CheckResult]:

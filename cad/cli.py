@@ -30,17 +30,26 @@ def assembly_from_args(args, rig=None):
     try:
         return build(rig, ShapeCache(enabled=not args.no_cache))
     except DesignError as exc:
-        raise UserError("the design cannot be built from these values:\n" + "\n".join(str(p) for p in exc.problems)) from None
+        raise design_error(exc.problems) from None
+
+
+def design_error(problems) -> UserError:
+    """An impossible design as bad input: one line per problem, each naming the rig key and its limit."""
+    return UserError("\n".join(str(p) for p in problems))
 
 
 def cmd_export(args) -> int:
-    from cad.export import FORMATS, export
+    from cad.export import FORMATS, export, foreign_files
     fmt = args.format.upper()
     if fmt != "ALL" and fmt not in FORMATS:
         raise UserError(f"unknown export format {args.format!r}; expected one of {', '.join(FORMATS)} or all")
     formats = set(FORMATS) if fmt == "ALL" else {fmt}
     if args.tolerance <= 0 or args.angular_tolerance <= 0:
         raise UserError("--tolerance and --angular-tolerance must be > 0 (mm and radians)")
+    foreign = foreign_files(args.out)
+    if foreign:
+        raise UserError(f"{args.out}: not a previous export (it holds {foreign[0]}, which export did not write); "
+                        f"refusing to replace it; choose an empty or new --out folder")
     asm = assembly_from_args(args)
     with OutputDir(args.out) as stage:
         files = export(asm, stage, formats, args.tolerance, args.angular_tolerance)
@@ -53,15 +62,13 @@ def cmd_export(args) -> int:
 
 
 def cmd_check(args) -> int:
-    from cad.checks import CheckResult, report, run_checks
+    from cad.checks import report, run_checks
     from cad.layout import design_problems
     rig = rig_from_args(args)
     problems = design_problems(rig)
     if problems:
-        results = [CheckResult("design constraints", False, f"{len(problems)} constraints broken",
-                               [str(p) for p in problems])]
-    else:
-        results = run_checks(assembly_from_args(args))
+        raise design_error(problems)
+    results = run_checks(assembly_from_args(args, rig))
     text = report(results, verbose=args.verbose > 0)
     if args.report:
         write_text(args.report, text)
@@ -73,10 +80,12 @@ def cmd_check(args) -> int:
 
 
 def cmd_params(args) -> int:
-    from cad.layout import C, layout
-    from cad.assembly import camera_frames
+    from cad.layout import C, DesignError, layout
     rig = rig_from_args(args)
-    lay = layout(rig) if not args.rig_only else None
+    try:
+        lay = layout(rig) if not args.rig_only else None
+    except DesignError as exc:
+        raise design_error(exc.problems) from None
     doc = {"rig": rig.to_data(), "rig_hash": rig.hash, "overrides": list(rig.overrides)}
     if lay is not None:
         from cad.bought.base import provenance
@@ -105,7 +114,10 @@ def register(sub) -> None:
     e = sub.add_parser("export", help="write STEP, STL, GLB, SVG, PNG (or all) to --out",
                        description="Export the assembly (one STEP with named, coloured parts; a GLB), every printed "
                                    "part as STEP and STL in its print orientation, and SVG/PNG views. The output "
-                                   "folder is replaced whole, only when everything was written.")
+                                   "folder is replaced whole, only when everything was written, and only if it is empty "
+                                   "or a previous export.",
+                       epilog="Exit codes: 0 written; 2 bad input (a bad --set, an impossible design, an unknown "
+                              "format, an --out folder that is not a previous export or cannot be written).")
     e.add_argument("format", metavar="FORMAT", help="STEP, STL, GLB, SVG, PNG or all")
     e.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: build/cad)")
     e.add_argument("--tolerance", type=float, default=0.1, help="mesh linear tolerance for STL/GLB/PNG (mm)")
@@ -118,7 +130,9 @@ def register(sub) -> None:
     c = sub.add_parser("check", help="check the assembly; exit 1 with a report if anything fails",
                        description="Valid solids, interference (intended overlaps measured), minimum wall, heat sink "
                                    "/ fan / wall clearances, print bed, fields of view, battery removal, vent area, "
-                                   "mass and balance, and the list of estimates.")
+                                   "mass and balance, and the list of estimates.",
+                       epilog="Exit codes: 0 every check passed; 1 a check failed (the report says which); 2 bad "
+                              "input (a bad --set or an impossible design: one line per rig key, with its limit).")
     c.add_argument("--report", type=Path, help="also write the report to this file")
     c.add_argument("--no-cache", action="store_true", help="rebuild every part (ignore the build cache)")
     add_rig_options(c)
@@ -126,7 +140,8 @@ def register(sub) -> None:
     c.set_defaults(handler=cmd_check)
 
     r = sub.add_parser("params", help="every resolved parameter (rig values, design constants, derived sizes)",
-                       description="Print the resolved rig description, the design's own constants and derived sizes.")
+                       description="Print the resolved rig description, the design's own constants and derived sizes.",
+                       epilog="Exit codes: 0 printed; 2 bad input (a bad --set or an impossible design).")
     r.add_argument("--rig-only", action="store_true", help="only the rig description (no layout)")
     add_rig_options(r)
     add_output_options(r)

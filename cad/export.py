@@ -17,6 +17,11 @@ from .geom import location, moved
 from .parts.common import on_bed
 
 FORMATS = ("STEP", "STL", "GLB", "SVG", "PNG")
+#: every export writes this file; a folder holding it is a previous export, which ``--out`` may replace
+EXPORT_MARKER = ".rig-cad-export"
+#: what an export writes (relative paths, glob patterns): a folder holding only these is an older export
+EXPORT_PATTERNS = ("rig_assembly.step", "rig_assembly.glb", "assembly_tree.json", "camera_frames.json",
+                   "printed/*.step", "printed/*.stl", "views/*.svg", "views/*.png", EXPORT_MARKER)
 VIEWS = {  # name: (projection direction towards the viewer, exploded)
     "iso": ((1.0, 1.0, 0.8), False),
     "front": ((1.0, 0.0, 0.0), False),
@@ -134,6 +139,16 @@ def export_key(asm: Assembly, formats: set[str], tolerance: float, angular: floa
     return h.hexdigest()[:32]
 
 
+def foreign_files(folder: Path) -> list[Path]:
+    """Files in ``folder`` that no export wrote: replacing the folder would delete them. Empty when the
+    folder does not exist, holds the export marker, or holds only what an export writes."""
+    folder = Path(folder)
+    if not folder.is_dir() or (folder / EXPORT_MARKER).is_file():
+        return []
+    return sorted(p for p in folder.rglob("*")
+                  if not p.is_dir() and not any(p.relative_to(folder).match(pat) for pat in EXPORT_PATTERNS))
+
+
 def export(asm: Assembly, stage: Path, formats: set[str], tolerance: float = 0.1, angular: float = 0.2) -> list[Path]:
     """Write the requested formats into ``stage`` (a staging folder); reuse an identical earlier export
     from the build cache when nothing it depends on changed."""
@@ -143,7 +158,7 @@ def export(asm: Assembly, stage: Path, formats: set[str], tolerance: float = 0.1
         shutil.copytree(cached, stage, dirs_exist_ok=True)
         (stage / "DONE").unlink()
         asm.cache.hits += 1
-        return sorted(p for p in stage.rglob("*") if p.is_file())
+        return sorted(p for p in stage.rglob("*") if p.is_file() and p.name != EXPORT_MARKER)
     out = _export(asm, stage, formats, tolerance, angular)
     if cached is not None:
         try:
@@ -175,4 +190,6 @@ def _export(asm: Assembly, stage: Path, formats: set[str], tolerance: float, ang
     if "PNG" in formats:
         out += write_pngs(asm, stage / "views", max(tolerance, 0.3))
     out += write_metadata(asm, stage)
+    marker = stage / EXPORT_MARKER
+    marker.write_text(f"written by cad/build.py export; rig {asm.rig.hash}\n")
     return out

@@ -95,12 +95,11 @@ def lug_screw_point(case: Case, c: Constants, x: float, s: float) -> Vec3:
 
 
 def port_cutout(fits: Fits, shell: Shell, compute: Compute) -> Bounds:
-    """The rear wall's window onto the Orin's ports; a window that would leave a sliver of wall under
-    the split becomes a notch open at the split."""
+    """The rear wall's window onto the Orin's ports: a notch open at the split, so the tray prints
+    without bridging it (a closed window is a ~110 mm bridge, beyond any printer's ``max_bridge_mm``);
+    the lid's rear wall closes it from above."""
     o, b, clear = shell.outer, compute.orin_box, fits.clear
-    top = b.lo[2] + compute.orin.port_panel_height_mm + clear
-    if shell.split_z - top < 2 * fits.wall or top > shell.split_z:
-        top = max(top, shell.split_z + HOLE_LEAD_MM)
+    top = max(b.lo[2] + compute.orin.port_panel_height_mm + clear, shell.split_z + HOLE_LEAD_MM)
     return Bounds((o.lo[0] - PORT_CUT_OVERRUN_MM, b.lo[1] - clear, b.lo[2] - clear),
                   (shell.interior.lo[0] + PORT_CUT_OVERRUN_MM, b.hi[1] + clear, top))
 

@@ -3,6 +3,7 @@ that a camera runs into another or that a handle does not fit the case. Every pr
 key (or design constant) to change, so an impossible value never reaches OpenCascade."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from platform_tools.rig import Rig
@@ -117,19 +118,68 @@ def _camera_problems(lay: Layout):
         yield DesignProblem("sensors.thermal.pose.xyz_mm", "the ZED X mount's foot runs into the thermal bar")
 
 
+def grip_length_ranges(lay: Layout) -> list[tuple[float, float]]:
+    """The grip lengths (mm) this case takes, as closed intervals: long enough to be a grip, with both
+    feet and their pads inside the case's straight length, and no foot pad on a split lug.
+
+    A pad's y and z do not depend on the grip length, only its x does: a foot's pad is centred at
+    ``x_mid +- (L/2 - post/2)``, so each pad that shares y and z with a lug forbids one open interval
+    of L. What is left of ``[post width + 2 x MIN_POST_MM, the fit limit]`` is returned."""
+    case, g, c = lay.case, lay.handles.geometry, lay.c
+    r = lay.rig.desc.enclosure.corner_radius_mm
+    x_mid = (case.outer.lo[0] + case.outer.hi[0]) / 2
+    lo = 2 * g.post_width + MIN_POST_MM              # two posts and a little grip between them
+    hi = case.outer.size[0] - 2 * r - 2 * g.flange - 2 * PAD_MARGIN_MM
+    pad_half = g.post_width / 2 + g.flange + PAD_MARGIN_MM
+    forbidden = []
+    for pad in lay.handles.pads:
+        s = 1.0 if pad.centre[0] > x_mid else -1.0
+        for x, side in case.lugs:
+            lug = lug_bounds(case, c, lay.fits, x, side)
+            if not all(pad.lo[k] < lug.hi[k] and lug.lo[k] < pad.hi[k] for k in (1, 2)):
+                continue
+            # with u = L/2 - post/2: |x_mid + s u - x| < reach  <=>  s (x - x_mid) - reach < u < ... + reach
+            reach = pad_half + c.lug_width_mm / 2
+            u0, u1 = s * (x - x_mid) - reach, s * (x - x_mid) + reach
+            forbidden.append((2 * u0 + g.post_width, 2 * u1 + g.post_width))
+    ranges = [(lo, hi)] if hi >= lo else []
+    for a, b in sorted(forbidden):
+        out = []
+        for r0, r1 in ranges:
+            if b <= r0 or a >= r1:
+                out.append((r0, r1))
+                continue
+            if a > r0:
+                out.append((r0, a))
+            if b < r1:
+                out.append((b, r1))
+        ranges = out
+    return ranges
+
+
+def _format_ranges(ranges: list[tuple[float, float]]) -> str:
+    if not ranges:
+        return "no grip length fits this case; make the case longer or the handle posts narrower"
+    # round inwards to 0.1 mm so the value suggested really passes
+    return "expected " + " or ".join(f"{math.ceil(a * 10) / 10:.1f} to {math.floor(b * 10) / 10:.1f} mm"
+                                     for a, b in ranges)
+
+
 def _handle_problems(lay: Layout):
     rig, case = lay.rig, lay.case
     h = rig.desc.enclosure.handles
-    r = rig.desc.enclosure.corner_radius_mm
     g = lay.handles.geometry
     length = case.outer.size[0]
-    foot_len = g.grip_length + 2 * g.flange + 2 * PAD_MARGIN_MM    # both feet with their pads
     if h.top or h.sides:
-        if foot_len > length - 2 * r:
+        ranges = grip_length_ranges(lay)
+        if not any(a - 1e-9 <= h.grip_length_mm <= b + 1e-9 for a, b in ranges):
+            foot_len = g.grip_length + 2 * g.flange + 2 * PAD_MARGIN_MM    # both feet with their pads
+            clashes = sorted({round(x, 1) for pad in lay.handles.pads for x, s in case.lugs
+                              if pad.overlaps(lug_bounds(case, lay.c, lay.fits, x, s))})
+            why = (f"its feet ({foot_len:g} mm) do not fit the {length:.1f} mm long case" if not clashes else
+                   "its foot pads run into the case's split lugs at x = " + ", ".join(f"{x:g}" for x in clashes) + " mm")
             yield DesignProblem("enclosure.handles.grip_length_mm",
-                                f"{h.grip_length_mm:g} mm grips with their feet ({foot_len:g} mm) do not fit the "
-                                f"{length:.1f} mm long case; expected <= "
-                                f"{length - 2 * r - 2 * g.flange - 2 * PAD_MARGIN_MM:.1f} mm")
+                                f"got {h.grip_length_mm:g} mm; {why}; {_format_ranges(ranges)}")
         if g.post_height < g.foot + MIN_POST_MM:
             yield DesignProblem("enclosure.handles.clearance_mm",
                                 f"{h.clearance_mm:g} mm leaves no post between the foot and the grip; expected >= "
@@ -139,13 +189,6 @@ def _handle_problems(lay: Layout):
         yield DesignProblem("enclosure.handles.grip_diameter_mm",
                             f"side handle feet ({pad_h:g} mm tall) do not fit the lid's "
                             f"{case.outer.hi[2] - case.split_z:.1f} mm side walls")
-    for pad in lay.handles.pads:
-        for x, s in case.lugs:
-            if pad.overlaps(lug_bounds(case, lay.c, lay.fits, x, s)):
-                yield DesignProblem("enclosure.handles.grip_length_mm",
-                                    f"a handle foot pad at x = {pad.centre[0]:.1f} mm runs into a case lug at "
-                                    f"x = {x:.1f} mm; shorten the grip")
-                break
 
 
 def _print_and_vent_problems(lay: Layout):

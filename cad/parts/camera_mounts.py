@@ -44,6 +44,7 @@ def thermal_mount(lay: Layout) -> ThermalMount:
 
 
 PRINT = {
-    "zed_mount": PrintSetup((0.0, -90.0, 0.0), "on its back face: the H profile prints upright, no overhang"),
+    "zed_mount": PrintSetup((180.0, 0.0, 0.0), "upside down on its shelf: legs and foot stand up from the bed; on its "
+                                                     "back face they floated 2 mm up (the overhang check)"),
     "thermal_mount": PrintSetup((0.0, 0.0, 0.0), "flat, as mounted"),
 }

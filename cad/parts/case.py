@@ -135,5 +135,7 @@ def case_spec(lay: Layout) -> CaseSpec:
 
 PRINT = {
     "case_lower": PrintSetup((0.0, 0.0, 0.0), "on its floor: walls, lugs with 45 deg gussets, notches open upwards"),
-    "case_lid": PrintSetup((180.0, 0.0, 0.0), "upside down on its roof: the ZED X notch opens upwards, lug gussets 45 deg"),
+    "case_lid": PrintSetup((0.0, -90.0, 0.0), "on its rear face: roof and walls stand up, the ZED X notch and the "
+                                              "lugs' 45 deg gussets face up; upside down the roof floated 4.8 mm on "
+                                              "the handle pads (the overhang check)"),
 }

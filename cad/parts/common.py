@@ -39,6 +39,8 @@ def on_bed(shape: cq.Shape, setup: PrintSetup, bed_mm: tuple[float, float, float
     rot = Pose.from_xyz_rpy_deg((0, 0, 0), setup.rpy_deg)
     s = moved(shape, rot)
     bb = s.BoundingBox()
-    shift = np.array([bed_mm[0] / 2 - (bb.xmin + bb.xmax) / 2, bed_mm[1] / 2 - (bb.ymin + bb.ymax) / 2, -bb.zmin])
+    # OCC's box is up to ~0.01 mm loose on a part turned off its axes: rest the part on its lowest mesh point
+    zmin = min(v.z for v in s.tessellate(0.01, 0.1)[0])
+    shift = np.array([bed_mm[0] / 2 - (bb.xmin + bb.xmax) / 2, bed_mm[1] / 2 - (bb.ymin + bb.ymax) / 2, -zmin])
     pose = Pose(rot.R, shift)
     return moved(shape, pose), pose

@@ -99,6 +99,8 @@ def fan_mount(lay: Layout, side: str) -> FanMount:
 
 
 PRINT = {
-    "fan_mount_left": PrintSetup((90.0, 0.0, 0.0), "on its plate: the duct lies on it, its roof a short bridge"),
-    "fan_mount_right": PrintSetup((-90.0, 0.0, 0.0), "on its plate: the duct lies on it, its roof a short bridge"),
+    "fan_mount_left": PrintSetup((0.0, 0.0, 0.0), "as mounted: plate and duct stand up; on its plate the duct's "
+                                                  "10 x 27 mm side floated (the overhang check)"),
+    "fan_mount_right": PrintSetup((0.0, 0.0, 0.0), "as mounted: plate and duct stand up; on its plate the duct's "
+                                                   "10 x 27 mm side floated (the overhang check)"),
 }
