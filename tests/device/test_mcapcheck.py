@@ -18,7 +18,10 @@ def clean_bag(tmp_path_factory):
     p = subprocess.Popen([sys.executable, "-m", "platform_tools.sim.fake_recorder", "-o", str(folder), "--misbehave", "fill-disk",
                           "--fill-mb-s", "4", "/a", "/b"],  # 1 MiB messages: many chunks
                          stderr=subprocess.DEVNULL)
-    time.sleep(1.5)
+    # until ten 1 MiB messages (and their frames) are on disk: the process starts slowly on a loaded machine
+    end = time.monotonic() + 60
+    while time.monotonic() < end and sum(f.stat().st_size for f in folder.glob("*.mcap")) < 10 * 2**20:
+        time.sleep(0.05)
     p.send_signal(signal.SIGINT)
     assert p.wait(10) == 0
     return folder / "b_0.mcap"

@@ -3,13 +3,12 @@
 the disk filling, power loss. The recording already written is never lost; the next press works."""
 from __future__ import annotations
 
-import pytest
-
 import json
 import os
 import signal
 import time
 
+import pytest
 
 from firmware.device import led, mcapcheck, metadata
 from firmware.device.button import Button, Press
@@ -27,6 +26,19 @@ def wait_for(cond, timeout=15.0, step=0.02):
     return False
 
 
+#: bytes of MCAP on disk that prove the recorder is writing (more than one 64 KiB chunk of the fake recorder)
+WRITTEN_BYTES = 128 * 1024
+
+
+def wait_written(rec: Recorder, timeout: float = 60.0) -> None:
+    """Wait until the running recording has chunks on disk: a recorder process starts slowly on a loaded
+    machine, and a fixed sleep would then stop or kill it before it wrote anything."""
+    def written() -> bool:
+        files = list(rec.session.bag.glob("*.mcap")) if rec.session and rec.session.bag.exists() else []
+        return sum(f.stat().st_size for f in files) >= WRITTEN_BYTES
+    assert wait_for(written, timeout), "the recorder wrote no chunk"
+
+
 def ticking_until_error(rec: Recorder, timeout: float) -> bool:
     """Run the periodic checks (the button loop does this every 10 ms) until the state is ERROR."""
     def cond():
@@ -41,6 +53,7 @@ def events(rec: Recorder) -> list[dict]:
 
 def record_for(rec: Recorder, seconds: float) -> dict:
     assert rec.start(), events(rec)[-1]
+    wait_written(rec)
     time.sleep(seconds)
     rec.press(Press.SHORT)
     assert rec.wait_stopped(20)
@@ -146,7 +159,7 @@ def test_disk_watchdog_stops_cleanly_before_the_disk_fills(make_recorder, data_d
 def test_power_loss_leaves_a_truncated_file_that_the_next_start_recovers(make_recorder):
     rec = make_recorder()
     assert rec.start()
-    time.sleep(1.2)
+    wait_written(rec)
     session = rec.session
     os.killpg(session.proc.pid, signal.SIGKILL)          # the power goes: nothing closes
     session.proc.proc.wait()
