@@ -96,6 +96,11 @@ def cmd_sync_check(args: argparse.Namespace) -> int:
             for e in periods:
                 print(f"FFC {cam}: {(e['end_ns'] - e['start_ns']) / 1e9:.2f} s from stamp {e['start_ns']} "
                       f"({e['source']})")
+        for cam, tr in (report.get("triggers") or {}).items():
+            for g in tr.get("segments", []):
+                print(f"trigger {cam} frames {g['frames'][0]}..{g['frames'][1]}: {g['offset_ms']:.2f} "
+                      f"+- {g['uncertainty_ms']:.2f} ms after the ZED's trigger ({g['established_by']})")
+        print("nearest-stamp residuals (not the pairing: the export pairs by trigger, above)")
         print(f"{'pair':<28} {'n':>5} {'mean':>7} {'std':>6} {'p99':>7} {'max':>7} {'offset':>7} {'jit99':>6} "
               f"{'ppm':>7}")
         for name, p in report["pairs"].items():

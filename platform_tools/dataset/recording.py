@@ -30,6 +30,9 @@ STREAMS = ("zed_left", "zed_right", "zed_depth", "zed_imu", "thermal_left", "the
 CAMERAS = ("zed_left", "zed_right", "thermal_left", "thermal_right")
 STATUS = ("thermal_left_status", "thermal_right_status")
 RECOVERED_SUFFIX = ".recovered.mcap"
+#: the first bytes of an SQLite 3 database (rosbag2's sqlite3 storage, ``.db3`` files)
+SQLITE_MAGIC = b"SQLite format 3\x00"
+SQLITE_SUFFIX = ".db3"
 
 
 class RecordingError(Exception):
@@ -83,12 +86,30 @@ class Recording:
                 "fingerprint": h.hexdigest()[:16]}
 
 
+def sqlite_refusal(path: Path, bag: Path) -> RecordingError:
+    """The one line for a sqlite3 rosbag2 bag: what it is and how to convert it (this package reads MCAP)."""
+    return RecordingError(
+        f"{path}: a sqlite3 rosbag2 bag (.db3), not MCAP; this tool reads MCAP: convert it first with "
+        f"`rosbags-convert --src {bag} --dst {bag.with_name(bag.name + '-mcap')} --dst-storage mcap` "
+        f"(or `ros2 bag convert`)")
+
+
+def _is_sqlite(path: Path) -> bool:
+    try:
+        with open(path, "rb") as f:
+            return f.read(len(SQLITE_MAGIC)) == SQLITE_MAGIC
+    except OSError:
+        return False
+
+
 def mcap_files(path: Path) -> tuple[str, list[Path]]:
-    """(recording name, its MCAP files in order) for a folder or a file."""
+    """(recording name, its MCAP files in order) for a folder or a file; a sqlite3 bag is refused."""
     path = Path(path)
     if not path.exists():
         raise RecordingError(f"{path}: no such file or folder")
     if path.is_file():
+        if path.suffix == SQLITE_SUFFIX or _is_sqlite(path):
+            raise sqlite_refusal(path, path.parent)
         if path.suffix != ".mcap":
             raise RecordingError(f"{path}: not an MCAP file (expected .mcap or a rosbag2 folder)")
         return path.stem, [path]
@@ -99,6 +120,8 @@ def mcap_files(path: Path) -> tuple[str, list[Path]]:
             files = [path / p for p in info["relative_file_paths"]]
         except (yaml.YAMLError, KeyError, TypeError) as exc:
             raise RecordingError(f"{meta}: not a rosbag2 metadata file ({exc})") from None
+        if info.get("storage_identifier") == "sqlite3" or any(f.suffix == SQLITE_SUFFIX for f in files):
+            raise sqlite_refusal(path, path)
         name = path.parent.name if path.name == "bag" else path.name
         missing = [f for f in files if not f.is_file()]
         if missing:
@@ -107,6 +130,8 @@ def mcap_files(path: Path) -> tuple[str, list[Path]]:
     if (path / "bag").is_dir():
         return path.name, mcap_files(path / "bag")[1]
     files = sorted(p for p in path.glob("*.mcap") if not p.name.endswith(RECOVERED_SUFFIX))
+    if not files and any(path.glob("*" + SQLITE_SUFFIX)):
+        raise sqlite_refusal(path, path)
     if not files:
         raise RecordingError(f"{path}: no MCAP files (expected a rosbag2 folder or .mcap files)")
     return path.name, files
@@ -127,6 +152,8 @@ def resolve_files(files: list[Path], recover: bool) -> tuple[list[Path], list[st
     or one written now with ``recover=True`` (the original is never modified)."""
     out, notes = [], []
     for f in files:
+        if _is_sqlite(f):
+            raise sqlite_refusal(f, f.parent)
         if not _is_truncated(f):
             out.append(f)
             continue

@@ -41,6 +41,9 @@ MIN_ANCHORS_WITHOUT_COUNTER = 3
 UNFIT_MIN_NS = 4_000_000
 #: candidate offsets searched, in periods
 MAX_PERIODS = 8
+#: the trigger gaps decide when the best offset lines up more than this many times the runner-up's
+#: common gaps (two adjacent missing pulses give the offset one period off a common gap too)
+GAP_DOMINANCE = 2
 
 
 class TriggerError(Exception):
@@ -256,7 +259,7 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
         need = 1 if counter is not None else MIN_ANCHORS_WITHOUT_COUNTER
         ranked = sorted(scores.items(), key=lambda kv: -kv[1])
         by_gaps = None
-        if ranked and ranked[0][1] >= need and (len(ranked) == 1 or ranked[1][1] == 0):
+        if ranked and ranked[0][1] >= need and (len(ranked) == 1 or ranked[0][1] > GAP_DOMINANCE * ranked[1][1]):
             by_gaps = ranked[0][0]
             n_anchor_total += ranked[0][1]
         in_window = cands
@@ -273,6 +276,16 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
             if window_ms is not None and n not in in_window:
                 evidence.append(f"outside the rig's stated latency {window_ms[0]:g}..{window_ms[1]:g} ms: "
                                 f"measure it and correct sync.stamp_latency_ms.{camera}")
+        elif len(in_window) == 1 and ranked and ranked[0][1] >= need and scores[in_window[0]] < ranked[0][1]:
+            # the stated latency picks one offset, the trigger gaps lean to another without deciding:
+            # evidence that disagrees is a refusal, never the window's guess
+            w, g = in_window[0], ranked[0][0]
+            raise TriggerError(
+                f"{where}{camera}: which trigger exposed frames {a}..{b} is ambiguous: the rig's stated latency "
+                f"(sync.stamp_latency_ms.{camera}: {window_ms[0]:g}..{window_ms[1]:g} ms) gives "
+                f"{(phase + w) * P / 1e6:.1f} ms, the trigger gaps common with the ZED favour {(phase + g) * P / 1e6:.1f} "
+                f"ms ({scores[g]} against {scores[w]}, not decisive); missing evidence: a measured latency or the "
+                f"Boson frame counter (telemetry rows)")
         elif len(in_window) == 1:
             n = in_window[0]
             evidence.append("causality + the rig's stated latency "

@@ -1,5 +1,8 @@
 """Write a simulated recording as the rig would: a rosbag2 folder with an MCAP of ROS 2 CDR messages
-(the rig's topics and frame ids), its metadata.yaml, and truth.json listing what was injected."""
+(the rig's topics and frame ids, each channel with its offered QoS), its metadata.yaml as rosbag2
+writes it (:mod:`.rosbag2_metadata`: rosbag2 and rosbags open the folder), and truth.json listing what
+was injected. The thermal status is what the FFC status node publishes
+(:class:`firmware.device.ffc_status.StatusTracker`, fed each received frame's telemetry)."""
 from __future__ import annotations
 
 import json
@@ -7,18 +10,60 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-import yaml
-from mcap_ros2.writer import Writer
+from mcap.writer import CompressionType, Writer as McapWriter
+from mcap_ros2._dynamic import serialize_dynamic
 
 from platform_tools.rig import atomic
 from platform_tools.rig.cameras import imagersize
 from platform_tools.rig.progress import progress
 from ..rig import Rig
 from platform_tools.boson import telemetry
-from . import geometry, msgs
+from firmware.device.ffc_status import StatusTracker
+from . import geometry, msgs, rosbag2_metadata
 from .timeline import NS, SimParams, Timeline, build, ffc_state
 
 LATENCY_NS = {"image": 6_000_000, "imu": 1_000_000, "status": 2_000_000}
+#: the simulated Bosons' serial numbers (bosonGetCameraSN) when the rig's are still placeholders (null)
+SIM_SERIALS = {"left": 900001, "right": 900002}
+MESSAGE_TYPES = ("sensor_msgs/Image", "sensor_msgs/CompressedImage", "sensor_msgs/Imu",
+                 "diagnostic_msgs/DiagnosticArray")
+
+
+class BagWriter:
+    """One MCAP as rosbag2_storage_mcap writes it: ROS 2 schemas, CDR messages, and every channel
+    carrying its publishers' offered QoS in its metadata; counts what it wrote for metadata.yaml."""
+
+    def __init__(self, f):
+        self.w = McapWriter(f, compression=CompressionType.ZSTD)
+        self.w.start(profile="ros2", library="rgbt-rig simulate-rig")
+        self.schemas, self.encoders, self.channels = {}, {}, {}
+        self.counts: dict[str, int] = {}
+        self.types: dict[str, str] = {}
+        self.qos = [rosbag2_metadata.qos_profile()]
+        for name in MESSAGE_TYPES:
+            ros_name, text = msgs.msgdef(name)
+            self.schemas[name] = self.w.register_schema(ros_name, "ros2msg", text.encode())
+            self.encoders[name] = serialize_dynamic(ros_name, text)[ros_name]
+
+    def put(self, topic: str, typ: str, msg: dict, log_ns: int) -> None:
+        if topic not in self.channels:
+            self.channels[topic] = self.w.register_channel(
+                topic, "cdr", self.schemas[typ], {rosbag2_metadata.QOS_KEY: rosbag2_metadata.qos_yaml(self.qos)})
+            self.types[topic] = msgs.msgdef(typ)[0]
+        n = self.counts.get(topic, 0)
+        self.w.add_message(self.channels[topic], log_ns, self.encoders[typ](msg), log_ns, n)
+        self.counts[topic] = n + 1
+
+    def finish(self) -> None:
+        self.w.finish()
+
+    def topics(self) -> dict[str, dict]:
+        return {t: {"type": self.types[t], "messages": c, "qos": self.qos} for t, c in self.counts.items()}
+
+
+def boson_serial(rig: Rig, side: str) -> int:
+    serial = getattr(rig.desc.sensors.thermal, side).serial
+    return int(serial) if serial is not None else SIM_SERIALS[side]
 
 
 def _sizes(rig: Rig, scale: float) -> dict[str, tuple[int, int]]:
@@ -61,13 +106,16 @@ class BosonTelemetry:
         started = [k for k in self.ffc_start_pulse.get(camera, []) if k <= index]
         ffc_frame = base + max(started) if started else base - BOOT_FFC_FRAMES_AGO
         return telemetry.encode_line(base + index, ffc_state(self.tl, camera, stamp_ns), ffc_frame,
-                                     self.rows * 2 * self.width_px)
+                                     max(self.rows * 2 * self.width_px, telemetry.MIN_LINE_BYTES))
 
 
 def _events(tl: Timeline) -> list[tuple[int, str, object]]:
+    """Every message's log time: frames, IMU samples, and the status the FFC node publishes for
+    each thermal frame it receives (stamped as the frame, logged after it)."""
     ev = [(f.stamp_ns + LATENCY_NS["image"], "frame", f) for f in tl.frames]
+    ev += [(f.stamp_ns + LATENCY_NS["image"] + LATENCY_NS["status"], "status", f)
+           for f in tl.frames if f.camera.startswith("thermal")]
     ev += [(t + LATENCY_NS["imu"], "imu", t) for t in tl.imu_stamps_ns]
-    ev += [(t + LATENCY_NS["status"], "status", t) for t in tl.status_ns]
     ev.sort(key=lambda e: (e[0], e[1]))
     return ev
 
@@ -77,25 +125,18 @@ def simulate(rig: Rig, out: Path, params: SimParams, scale: float = 0.25) -> dic
     topics = rig.desc.on_device.topics
     sizes = _sizes(rig, scale)
     rng = np.random.default_rng(params.seed + 1)
-    counts: dict[str, int] = {}
     with atomic.OutputDir(out) as stage:
         bag = stage / "bag"
         bag.mkdir()
         with open(bag / "bag_0.mcap", "wb") as f:
-            w = Writer(f)
-            schema = {n: w.register_msgdef(*msgs.msgdef(n)) for n in (
-                "sensor_msgs/Image", "sensor_msgs/CompressedImage", "sensor_msgs/Imu",
-                "diagnostic_msgs/DiagnosticArray")}
+            w = BagWriter(f)
+            put = w.put
             last_thermal: dict[str, np.ndarray] = {}
-
-            def put(topic: str, typ: str, msg: dict, log_ns: int) -> None:
-                w.write_message(topic, schema[typ], msg, log_time=log_ns, publish_time=log_ns,
-                                sequence=counts.get(topic, 0))
-                counts[topic] = counts.get(topic, 0) + 1
-
             events = _events(tl)
             renderer = geometry.SceneRenderer(rig, sizes)
             tele = BosonTelemetry(tl, rig.desc.on_device.thermal_telemetry_rows, sizes["thermal"][0])
+            trackers = {f"thermal_{side}": StatusTracker(f"thermal_{side}", str(boson_serial(rig, side)), tele.rows)
+                        for side in ("left", "right")}
             for log_ns, kind, item in progress(events, desc="simulate-rig", unit="msg"):
                 if kind == "frame":
                     t_s = (item.index / tl.rate_hz)
@@ -131,22 +172,20 @@ def simulate(rig: Rig, out: Path, params: SimParams, scale: float = 0.25) -> dic
                     put(topics.zed_imu, "sensor_msgs/Imu",
                         msgs.imu(item, f"{rig.desc.on_device.zed_camera_name}_imu_link",
                                  rng.normal(0, 0.01, 3), (0.0, 0.0, 9.81) + rng.normal(0, 0.05, 3)), log_ns)
-                else:
-                    for side in ("left", "right"):
-                        cam = f"thermal_{side}"
-                        state = ffc_state(tl, cam, item)
-                        put(getattr(topics, f"{cam}_status"), "diagnostic_msgs/DiagnosticArray",
-                            msgs.diagnostic(item, cam, str(getattr(rig.desc.sensors.thermal, side).serial),
-                                            {"ffc_status": state, "ffc_in_progress": int(state == 2)}), log_ns)
+                else:   # the FFC status node's message for this frame (it reads the same telemetry)
+                    tel = telemetry.decode_line(tele.line(item.camera, item.index, item.stamp_ns))
+                    status = trackers[item.camera].on_telemetry(item.stamp_ns, tel)
+                    if status is not None:
+                        put(getattr(topics, f"{item.camera}_status"), "diagnostic_msgs/DiagnosticArray", status,
+                            log_ns)
             w.finish()
         start, end = events[0][0], events[-1][0]
-        (bag / "metadata.yaml").write_text(yaml.safe_dump({"rosbag2_bagfile_information": {
-            "version": 5, "storage_identifier": "mcap", "relative_file_paths": ["bag_0.mcap"],
-            "duration": {"nanoseconds": end - start}, "starting_time": {"nanoseconds_since_epoch": start},
-            "message_count": sum(counts.values()),
-            "topics_with_message_count": [{"topic_metadata": {"name": t, "serialization_format": "cdr"},
-                                           "message_count": c} for t, c in counts.items()]}}, sort_keys=False))
+        counts = w.counts
+        (bag / "metadata.yaml").write_text(rosbag2_metadata.dump(rosbag2_metadata.metadata(
+            [{"path": "bag_0.mcap", "start_ns": start, "end_ns": end, "messages": sum(counts.values())}],
+            w.topics())))
         truth = tl.truth() | {"rig_hash": rig.hash, "topics": counts, "image_sizes": sizes, "scale": scale,
+                              "boson_serials": {s: boson_serial(rig, s) for s in ("left", "right")},
                               "telemetry": {"rows": tele.rows if tele.enabled else 0, "location": "bottom",
                                             "frame_counter_base": COUNTER_BASE,
                                             "ffc_start_pulse": tele.ffc_start_pulse},

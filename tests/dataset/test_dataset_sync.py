@@ -66,9 +66,11 @@ def test_clock_step_found_and_taken_out(report, sim, rig):
 
 def test_ffc_periods_from_status_and_from_frozen_frames(report, sim, rig):
     rep, truth = report
-    for e in truth["ffc"]:
+    period_ns = 1e9 / truth["rate_hz"]
+    for e in truth["ffc"]:   # the status node reports at frame stamps: the first frame in, the first out
         (got,) = rep["ffc"][e["camera"]]
-        assert got["start_ns"] == e["start_ns"] and got["end_ns"] == e["end_ns"] and got["source"] == "status"
+        assert got["source"] == "status"
+        assert abs(got["start_ns"] - e["start_ns"]) < period_ns and abs(got["end_ns"] - e["end_ns"]) < period_ns
     rec = open_recording(sim[0], rig)
     rec.status = {}
     from platform_tools.dataset.sync import ffc_periods

@@ -1,0 +1,187 @@
+"""Recordings of a rig written with the rosbags library (an independent ROS 2 bag writer, not this project's
+simulator), with the truth of which trigger pulse exposed every frame.
+
+The timeline is built here from first principles and shares no code with platform_tools.sim: a trigger
+every 1/30 s; pulses missing from every camera; per camera host drops; each Boson stamped
+``latency_ms`` after its trigger with its own jitter; an FFC freezing a Boson's image for a range of
+triggers; host clock steps on the ZED clock (ZED images and IMU), on the thermal clock, or on both.
+Images are tiny (ZED 32x20, Boson 40x32: the calibrated aspect ratios) so the tests stay fast.
+
+Topic names come from a layout (the project's: the rig's ``on_device.topics``; the released stack's:
+``UPSTREAM`` below, as its topic_list.yaml spells them).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import Stores, get_typestore
+
+PERIOD_NS = 1e9 / 30
+T0_NS = 1_700_000_000 * 1_000_000_000
+IMU_PERIOD_NS = 5_000_000
+ZED_SIZE = (32, 20)        # W, H: 1920x1200 / 60
+THERMAL_SIZE = (40, 32)    # 640x512 / 16
+TRANSPORT_NS = 6_000_000   # log time after the stamp
+
+#: the released TartanRGBT stack's topics (upstream-tartanrgbt.md): the ones a reader needs, and the
+#: extra ones its bags also carry
+UPSTREAM = {"zed_left": "/zed/zed_node/left_raw/image_raw_color", "zed_right": "/zed/zed_node/right_raw/image_raw_color",
+            "zed_left_info": "/zed/zed_node/left_raw/camera_info", "zed_right_info": "/zed/zed_node/right_raw/camera_info",
+            "zed_imu": "/zed/zed_node/imu/data", "thermal_left": "/thermal_left/image",
+            "thermal_right": "/thermal_right/image", "thermal_left_info": "/thermal_left/camera_info",
+            "thermal_right_info": "/thermal_right/camera_info", "thermal_left_status": "/thermal_left/ffc_status",
+            "thermal_right_status": "/thermal_right/ffc_status"}
+UPSTREAM_EXTRA = ("/zed/zed_node/status/heartbeat", "/health/thermal_left/frequency", "/zed/robot_description")
+
+
+def project_layout(rig) -> dict[str, str]:
+    t = rig.desc.on_device.topics
+    return {s: getattr(t, s) for s in ("zed_left", "zed_right", "zed_depth", "zed_imu", "thermal_left",
+                                       "thermal_right", "thermal_left_status", "thermal_right_status")}
+
+
+@dataclass
+class Spec:
+    triggers: int = 150
+    latency_ms: dict = field(default_factory=lambda: {"thermal_left": 10.0, "thermal_right": 20.0})
+    #: trigger pulses that never came (missing in every camera)
+    missing: tuple = (20, 21, 55, 90, 121)
+    drop: float = 0.02
+    #: camera -> (first, last) trigger of its FFC: the image frozen on the frame before
+    ffc: dict = field(default_factory=lambda: {"thermal_left": (70, 84)})
+    #: (trigger at which the host clock steps, size in ms, "zed" | "thermal" | "all")
+    steps: tuple = ()
+    status: str | None = "diagnostic"      # "diagnostic" | "bool" | None (no status topic)
+    zed_compressed: bool = True            # the project's ZED topics are JPEG; upstream's raw bgra8
+    depth: bool = True
+    camera_info: bool = False
+    seed: int = 0
+
+
+def _stepped(true_ns: np.ndarray, steps, clock: str, period_ns: float = PERIOD_NS) -> np.ndarray:
+    out = true_ns.astype(np.int64).copy()
+    for at, ms, on in steps:
+        if on in (clock, "all"):
+            out += np.where(true_ns >= T0_NS + at * period_ns - 2e6, int(ms * 1e6), 0).astype(np.int64)
+    return out
+
+
+def timeline(spec: Spec) -> dict:
+    """Per stream: (trigger numbers, true stamps, host stamps); the IMU's true and host stamps."""
+    rng = np.random.default_rng(spec.seed)
+    k_all = np.array([k for k in range(spec.triggers) if k not in spec.missing])
+    out = {}
+    kz = k_all[rng.random(len(k_all)) > spec.drop]
+    tz = T0_NS + kz * PERIOD_NS + rng.normal(0, 0.2e6, len(kz))
+    out["zed_left"] = (kz, tz, _stepped(tz, spec.steps, "zed"))
+    for cam in ("thermal_left", "thermal_right"):
+        k = k_all[rng.random(len(k_all)) > spec.drop]
+        t = T0_NS + k * PERIOD_NS + spec.latency_ms[cam] * 1e6 + rng.normal(0, 0.6e6, len(k))
+        out[cam] = (k, t, _stepped(t, spec.steps, "thermal"))
+    ti = T0_NS - 1e8 + np.arange(int((spec.triggers * PERIOD_NS + 2e8) / IMU_PERIOD_NS)) * IMU_PERIOD_NS
+    out["zed_imu"] = (None, ti, _stepped(ti, spec.steps, "zed"))
+    return out
+
+
+def _header(ts, stamp_ns: int, frame_id: str):
+    Time = ts.types["builtin_interfaces/msg/Time"]
+    Header = ts.types["std_msgs/msg/Header"]
+    return Header(stamp=Time(sec=int(stamp_ns // 1_000_000_000), nanosec=int(stamp_ns % 1_000_000_000)),
+                  frame_id=frame_id)
+
+
+def _image(ts, stamp, frame_id, px: np.ndarray, encoding: str):
+    h, w = px.shape[:2]
+    data = np.ascontiguousarray(px).view(np.uint8).reshape(-1)
+    return ts.types["sensor_msgs/msg/Image"](header=_header(ts, stamp, frame_id), height=h, width=w,
+                                             encoding=encoding, is_bigendian=0, step=data.size // h, data=data)
+
+
+def camera_info(ts, stamp, frame_id, size, fx, fy, cx, cy, d=(0.0, 0.0, 0.0, 0.0, 0.0)):
+    RegionOfInterest = ts.types["sensor_msgs/msg/RegionOfInterest"]
+    return ts.types["sensor_msgs/msg/CameraInfo"](
+        header=_header(ts, stamp, frame_id), height=size[1], width=size[0], distortion_model="plumb_bob",
+        d=np.array(d, float), k=np.array([fx, 0, cx, 0, fy, cy, 0, 0, 1], float),
+        r=np.eye(3).reshape(-1), p=np.array([fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0], float),
+        binning_x=0, binning_y=0, roi=RegionOfInterest(x_offset=0, y_offset=0, height=0, width=0, do_rectify=False))
+
+
+def write(path: Path, spec: Spec, topics: dict[str, str], storage: str = "mcap",
+          infos: dict[str, object] | None = None) -> dict:
+    """Write the bag folder ``path``; return the truth: per stream, host stamp -> trigger number, and
+    per thermal camera the triggers of its frozen (FFC) frames."""
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    rng = np.random.default_rng(spec.seed + 100)
+    tl = timeline(spec)
+    msgs: list[tuple[int, str, str, object]] = []     # (log ns, topic, type, message)
+    truth = {"trigger_of": {}, "ffc_triggers": {}, "latency_ms": dict(spec.latency_ms), "steps": list(spec.steps)}
+    kz, tz, hz = tl["zed_left"]
+    zed_type = "sensor_msgs/msg/CompressedImage" if spec.zed_compressed else "sensor_msgs/msg/Image"
+    for k, t, h in zip(kz, tz, hz):
+        log = int(t) + TRANSPORT_NS
+        for side in ("left", "right"):
+            bgr = rng.integers(0, 255, (ZED_SIZE[1], ZED_SIZE[0], 3), dtype=np.uint8)
+            fid = f"zed_{side}_camera_optical_frame"
+            if spec.zed_compressed:
+                jpg = cv2.imencode(".jpg", bgr)[1].reshape(-1)
+                m = ts.types["sensor_msgs/msg/CompressedImage"](header=_header(ts, int(h), fid), format="jpeg",
+                                                                 data=jpg)
+            else:
+                bgra = np.dstack([bgr, np.full(bgr.shape[:2], 255, np.uint8)])
+                m = _image(ts, int(h), fid, bgra, "bgra8")
+            msgs.append((log, topics[f"zed_{side}"], zed_type, m))
+        if spec.depth:
+            msgs.append((log, topics["zed_depth"], "sensor_msgs/msg/Image",
+                         _image(ts, int(h), "zed_left_camera_optical_frame",
+                                np.full((ZED_SIZE[1], ZED_SIZE[0]), 3.0, np.float32), "32FC1")))
+        for name in ("zed_left", "zed_right") + (("zed_depth",) if spec.depth else ()):
+            truth["trigger_of"].setdefault(name, {})[int(h)] = int(k)
+    for cam in ("thermal_left", "thermal_right"):
+        k_, t_, h_ = tl[cam]
+        first, last = spec.ffc.get(cam, (-1, -2))
+        truth["ffc_triggers"][cam] = [int(k) for k in k_ if first <= k <= last]
+        frozen_px = None
+        for k, t, h in zip(k_, t_, h_):
+            in_ffc = first <= k <= last
+            if in_ffc and frozen_px is not None:
+                px = frozen_px
+            else:
+                px = (20000 + rng.normal(0, 300, (THERMAL_SIZE[1], THERMAL_SIZE[0]))).astype(np.uint16)
+                frozen_px = px
+            log = int(t) + TRANSPORT_NS
+            msgs.append((log, topics[cam], "sensor_msgs/msg/Image", _image(ts, int(h), f"{cam}_optical", px, "mono16")))
+            truth["trigger_of"].setdefault(cam, {})[int(h)] = int(k)
+            if spec.status == "diagnostic":
+                kv = ts.types["diagnostic_msgs/msg/KeyValue"]
+                st = ts.types["diagnostic_msgs/msg/DiagnosticStatus"](
+                    level=bytes([1 if in_ffc else 0])[0], name=cam, message="FFC in progress" if in_ffc else "",
+                    hardware_id="93588", values=[kv(key="ffc_status", value="2" if in_ffc else "0")])
+                msgs.append((log + 1_000_000, topics[f"{cam}_status"], "diagnostic_msgs/msg/DiagnosticArray",
+                             ts.types["diagnostic_msgs/msg/DiagnosticArray"](header=_header(ts, int(h), ""),
+                                                                             status=[st])))
+            elif spec.status == "bool":
+                msgs.append((log + 1_000_000, topics[f"{cam}_status"], "std_msgs/msg/Bool",
+                             ts.types["std_msgs/msg/Bool"](data=bool(in_ffc))))
+    _, ti, hi = tl["zed_imu"]
+    V3, Q = ts.types["geometry_msgs/msg/Vector3"], ts.types["geometry_msgs/msg/Quaternion"]
+    for t, h in zip(ti, hi):
+        msgs.append((int(t) + 1_000_000, topics["zed_imu"], "sensor_msgs/msg/Imu", ts.types["sensor_msgs/msg/Imu"](
+            header=_header(ts, int(h), "zed_imu_link"), orientation=Q(x=0.0, y=0.0, z=0.0, w=1.0),
+            orientation_covariance=np.zeros(9), angular_velocity=V3(x=0.0, y=0.0, z=0.0),
+            angular_velocity_covariance=np.zeros(9), linear_acceleration=V3(x=0.0, y=0.0, z=9.81),
+            linear_acceleration_covariance=np.zeros(9))))
+    for topic, msg in (infos or {}).items():
+        msgs.append((T0_NS, topic, "sensor_msgs/msg/CameraInfo", msg))
+    msgs.sort(key=lambda m: m[0])
+    plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+    with Writer(Path(path), version=8, storage_plugin=plugin) as w:
+        conns = {}
+        for log, topic, typ, msg in msgs:
+            if topic not in conns:
+                conns[topic] = w.add_connection(topic, typ, typestore=ts)
+            w.write(conns[topic], log, ts.serialize_cdr(msg, typ))
+    return truth
