@@ -10,6 +10,7 @@ from platform_tools.rig.conventions import (UserError, add_output_options, add_r
 
 from calibration.synth import DIFFICULTIES, render_dataset
 from calibration.synth.lens import nominal_thermal_lens
+from calibration.synth.truth_families import FAMILIES, truth_lens
 
 
 def parse_board(text: str) -> tuple[int, int]:
@@ -41,6 +42,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same images")
     p.add_argument("--camera", default="thermal_left", help="camera of the rig whose nominal lens is used "
                                                             "(default thermal_left)")
+    p.add_argument("--truth-lens", choices=FAMILIES, default="opencv8",
+                   help="family of the truth lens (default opencv8, the rig's nominal lens); the others are "
+                        "rendered in closed form and write their own truth files (docs/calibration-synthetic.md)")
+    p.add_argument("--output", choices=("y16", "agc8"), default="y16",
+                   help="y16: 16-bit counts (default); agc8: 8-bit histogram-equalised, as a Boson in 8-bit mode")
     add_rig_options(p)
     add_output_options(p)
     p.set_defaults(handler=cmd_synth)
@@ -55,13 +61,16 @@ def cmd_synth(args: argparse.Namespace) -> int:
     rig = rig_from_args(args)
     try:
         lens = nominal_thermal_lens(rig, args.camera)
+        if args.truth_lens != "opencv8":
+            lens = truth_lens(args.truth_lens, lens.imagersize(), rig)
     except KeyError as exc:
         raise UserError(f"--camera {args.camera}: {exc.args[0]}") from None
     except ValueError as exc:
         raise UserError(f"rig description: {exc}") from None
     try:
         truth = render_dataset(args.out, n=args.n, difficulty=args.difficulty, board=board, square=args.square,
-                               seed=args.seed, lens=lens, show_progress=not args.quiet)
+                               seed=args.seed, lens=lens, show_progress=not args.quiet,
+                               output=args.output)
     except RuntimeError as exc:
         raise UserError(str(exc)) from None
     summary = {"out": str(args.out), "images": len(truth["images"]), "difficulty": args.difficulty,
@@ -75,5 +84,5 @@ def cmd_synth(args: argparse.Namespace) -> int:
     elif not args.quiet:
         print(f"{args.out}: {summary['images']} {args.difficulty} images ({summary['fully_visible']} boards fully "
               f"visible, {summary['partial']} partly outside, {summary['occluded']} occluded), truth.json, "
-              f"truth.cameramodel")
+              f"{', '.join(truth.get('truth_lens', {}).get('files', ['truth.cameramodel']))}")
     return 0

@@ -1,4 +1,5 @@
-"""A synthetic calibration set on disk: NNN.png (16-bit counts), truth.cameramodel, truth.json."""
+"""A synthetic calibration set on disk: NNN.png (16-bit counts, or 8-bit AGC), truth.json and the truth
+lens' files (truth.cameramodel for an mrcal lens; calibration/synth/truth_files.py for the others)."""
 from __future__ import annotations
 
 import io
@@ -16,8 +17,13 @@ from .board import Board
 from .difficulty import Difficulty, level
 from .lens import as_cameramodel
 from .poses import sample_view
+from .agc import agc8
 from .render import render_image
 from .sensor import Sensor
+from .truth_files import write_truth_files
+from .truth_lens import RadialLens
+
+OUTPUTS = ("y16", "agc8")     # 16-bit raw counts; 8-bit AGC (histogram equalised, as a Boson in 8-bit mode)
 
 
 def default_lens(camera: str = "thermal_left", rig=None):
@@ -35,14 +41,18 @@ def rt_from_R_t(R: np.ndarray, t: np.ndarray) -> list[float]:
 
 def render_dataset(out_dir, n: int = 40, difficulty: str | Difficulty = "real", board=(10, 7), square: float = 0.04,
                    seed: int = 0, lens=None, *, camera: str = "thermal_left", rig=None,
-                   show_progress: bool = True, only=None) -> dict:
+                   show_progress: bool = True, only=None, output: str = "y16") -> dict:
     """Render ``n`` images of a ``board`` (W, H inner corners, ``square`` metres) through ``lens``
     (an mrcal.cameramodel, a .cameramodel path or a (lensmodel, intrinsics, (W, H)) tuple; default: the
     nominal thermal lens of ``camera`` in the rig description) into ``out_dir``,
     replaced whole and atomically. ``difficulty``: a name (easy, real, hard) or a :class:`Difficulty`
     (e.g. one effect switched off, as bench/bench_corner_bias.py does). Returns the truth (also
     written to truth.json). ``only``: render just these image indices (each the same pixels as in
-    the whole set: every image has its own random stream), e.g. one bench image for a test."""
+    the whole set: every image has its own random stream), e.g. one bench image for a test.
+    ``lens`` may also be a truth lens of another family (a RadialLens: calibration/synth/truth_families.py).
+    ``output``: "y16" (16-bit counts) or "agc8" (the same frames through the 8-bit AGC, calibration/synth/agc.py)."""
+    if output not in OUTPUTS:
+        raise ValueError(f"output={output!r}: one of {', '.join(OUTPUTS)}")
     diff = difficulty if isinstance(difficulty, Difficulty) else level(difficulty)
     difficulty = diff.name
     W, H = int(board[0]), int(board[1])
@@ -67,6 +77,8 @@ def render_dataset(out_dir, n: int = 40, difficulty: str | Difficulty = "real", 
             irng = np.random.default_rng([seed, k])
             view = sample_view(irng, lens, b, diff)
             img, occluded, look = render_image(irng, lens, b, view, diff, sensor)
+            if output == "agc8":
+                img = agc8(img)
             name = f"{k:03d}.png"
             ok, png = cv2.imencode(".png", img)
             if not ok:
@@ -81,9 +93,15 @@ def render_dataset(out_dir, n: int = 40, difficulty: str | Difficulty = "real", 
         truth = {"lensmodel": lensmodel, "intrinsics": intrinsics.tolist(), "imagersize": [W_img, H_img],
                  "board": {"width": W, "height": H, "square_m": float(square)},
                  "difficulty": difficulty, "seed": seed, "images": images}
+        if output != "y16":
+            truth["output"] = output
+        note = f"the exact lens the synthetic {difficulty} images (seed {seed}) were rendered through"
+        if isinstance(lens, RadialLens):
+            truth["truth_lens"] = {"family": lens.family, "name": lens.name,
+                                   "files": write_truth_files(stage, lens, note)}
+        else:
+            buf = io.StringIO()
+            lens.write(buf, note=note)
+            (stage / "truth.cameramodel").write_text(buf.getvalue())
         (stage / "truth.json").write_text(json.dumps(truth, indent=1))
-        buf = io.StringIO()
-        lens.write(buf, note=f"the exact lens the synthetic {difficulty} images (seed {seed}) "
-                                           f"were rendered through")
-        (stage / "truth.cameramodel").write_text(buf.getvalue())
     return truth

@@ -27,6 +27,8 @@ from platform_tools.rig.cameras import camera_model
 
 from calibration.lens.radial import FIT_MARGIN, rational_factor, rational_terms
 
+from .truth_lens import RadialLens
+
 # fixed imperfections of the synthetic lens (pixels / ratios); see the module docstring
 FY_OVER_FX = 0.999
 PRINCIPAL_OFFSET_PX = (2.3, -1.7)
@@ -34,9 +36,10 @@ PRINCIPAL_OFFSET_PX = (2.3, -1.7)
 
 def as_cameramodel(lens):
     """An ``mrcal.cameramodel`` (the project's one camera value) from a cameramodel (returned as is), a
-    .cameramodel path, or a (lensmodel, intrinsics, imagersize (W, H)) tuple."""
+    .cameramodel path, or a (lensmodel, intrinsics, imagersize (W, H)) tuple; a truth lens of another
+    family (:class:`~calibration.synth.truth_lens.RadialLens`) is returned as is."""
     import mrcal
-    if isinstance(lens, mrcal.cameramodel):
+    if isinstance(lens, (mrcal.cameramodel, RadialLens)):
         return lens
     if isinstance(lens, (str, bytes)) or hasattr(lens, "__fspath__"):
         return mrcal.cameramodel(str(lens))
@@ -45,7 +48,10 @@ def as_cameramodel(lens):
 
 
 def project(p: np.ndarray, lens) -> np.ndarray:
-    """Pixels (..., 2) of camera-frame points ``p`` (..., 3) through ``lens`` (an mrcal.cameramodel)."""
+    """Pixels (..., 2) of camera-frame points ``p`` (..., 3) through ``lens`` (an mrcal.cameramodel, or a
+    RadialLens: its own closed form)."""
+    if isinstance(lens, RadialLens):
+        return lens.project(p)
     import mrcal
     return mrcal.project(np.ascontiguousarray(p, dtype=float), *lens.intrinsics())
 
@@ -138,7 +144,9 @@ def unproject_radial(q: np.ndarray, lens) -> np.ndarray:
 
 def unproject(q: np.ndarray, lens) -> np.ndarray:
     """Unit observation vectors (..., 3) of pixels (..., 2) through ``lens`` (an mrcal.cameramodel): the
-    fast exact path when the lens allows it, else mrcal.unproject."""
+    fast exact path when the lens allows it, a RadialLens' own inversion, else mrcal.unproject."""
+    if isinstance(lens, RadialLens):
+        return lens.unproject(q)
     if _is_radial_opencv8(lens):
         return unproject_radial(q, lens)
     import mrcal
@@ -149,6 +157,8 @@ def unproject(q: np.ndarray, lens) -> np.ndarray:
 def max_valid_angle_rad(lens) -> float:
     """Off-axis angle where the lens' radial profile stops being monotonic (beyond it a projection is
     not the lens any more); 85 deg for lenses without a turning point in view."""
+    if isinstance(lens, RadialLens):
+        return lens.max_angle_rad
     lm, intr = lens.intrinsics()
     if lm != "LENSMODEL_OPENCV8":
         return math.radians(85.0)

@@ -16,6 +16,7 @@ from platform_tools.rig.cameras import camera_model, imagersize
 from .board import Board
 from .difficulty import Difficulty
 from .lens import unproject
+from .truth_lens import RadialLens
 from .poses import BoardView
 from .scene import AMBIENT_K, background, hand
 from .sensor import Sensor
@@ -26,13 +27,23 @@ SUPERSAMPLE = 4
 def ray_grid(lens, ss: int = SUPERSAMPLE) -> np.ndarray:
     """Unit rays (H*ss, W*ss, 3) float32 of every sub-pixel centre of ``lens`` (an mrcal.cameramodel);
     pixel (x, y) spans x +- 0.5. Cached by the lens' values (a set's images share one grid)."""
+    if isinstance(lens, RadialLens):
+        return _truth_ray_grid(lens, ss)
     lm, intr = lens.intrinsics()
     return _ray_grid(lm, tuple(float(x) for x in intr), imagersize(lens), ss)
 
 
 @lru_cache(maxsize=2)
 def _ray_grid(lensmodel: str, intrinsics: tuple[float, ...], size: tuple[int, int], ss: int) -> np.ndarray:
-    lens = camera_model(lensmodel, intrinsics, size)
+    return _sub_pixel_rays(camera_model(lensmodel, intrinsics, size), size, ss)
+
+
+@lru_cache(maxsize=2)
+def _truth_ray_grid(lens: RadialLens, ss: int) -> np.ndarray:
+    return _sub_pixel_rays(lens, lens.size, ss)
+
+
+def _sub_pixel_rays(lens, size: tuple[int, int], ss: int) -> np.ndarray:
     W, H = size
     off = (np.arange(ss) + 0.5) / ss - 0.5
     xs = (np.arange(W)[:, None] + off[None, :]).ravel()

@@ -1,0 +1,131 @@
+"""Thermal calibration on truth lenses of other families than the solver's, side by side with the
+reference tools, on the same images in one run.
+
+For each truth family (calibration/synth/truth_families.py: kannala-brandt, stereographic,
+boson-published, and opencv8 as the anchor: the solver's own default family) and condition ("real",
+"hard"), renders N images of an 8x8 board (square, so mrgingham runs too) and runs
+
+  ours        our detector (bench_detection.run_ours) and `calibrate thermal` (bench_intrinsics.run_ours,
+              default solver and lens model)
+  OpenCV      findChessboardCornersSB on 8-bit images (bench_detection.run_opencv) + cv2.fisheye
+              (bench_intrinsics.run_opencv)
+  mrgingham   mrgingham on 8-bit images (bench_detection.run_mrgingham) + mrcal-calibrate-cameras
+              LENSMODEL_OPENCV8 (bench_intrinsics.run_mrgingham)
+
+Reported per row: complete boards found of the fully visible, unoccluded ones; corner RMS vs truth
+(complete boards, corners within 1 px) and corners > 1 px; for ours also corners > 3 px from their
+own truth on every board reported (partial ones too); model error vs truth (projection difference
+after the best-fit rotation, calibration.lens.compare) RMS over the whole image, corners included,
+and over the central 80%; the truth is the lens' own closed-form unprojection.
+
+Usage: .venv/bin/python bench/bench_calib_lenses.py [--n 20] [--seed 11] [--families ...]
+       [--conditions real,hard] [--work DIR]
+Targets (issue 14 item 4, on 40 images): real: corner RMS <= 0.06 px, model <= 0.10 px whole and
+<= 0.08 px central; hard: >= 85 % complete, corner RMS <= 0.30 px, no corner > 3 px, model <= 0.5 px
+whole and <= 0.25 px central.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import bench_detection as bd  # noqa: E402
+import bench_intrinsics as bi  # noqa: E402
+
+from calibration.lens.compare import compare  # noqa: E402
+from calibration.synth import render_dataset  # noqa: E402
+from calibration.synth.lens import unproject  # noqa: E402
+from calibration.synth.truth_families import FAMILIES, truth_lens  # noqa: E402
+
+BOARD, SQUARE = bi.BOARD, bi.SQUARE
+WILD_PX = 3.0
+
+
+def wild_corners(truth: dict, found: dict) -> int:
+    """Corners reported (any board, partial too) more than WILD_PX from their own truth."""
+    return bd.evaluate_all(truth, found)["mislabelled"]
+
+
+def model_error(proj, lens, size) -> tuple[float, float] | None:
+    if proj is None:
+        return None
+    c = compare(proj, lambda q: unproject(np.asarray(q, float), lens), size)
+    return c.rms_px, c.central_rms_px
+
+
+def run_set(family: str, condition: str, n: int, seed: int, work: Path) -> list[dict]:
+    import json
+    lens = truth_lens(family)
+    src = work / f"{family}_{condition}"
+    t = time.perf_counter()
+    render_dataset(src, n=n, difficulty=condition, board=BOARD, square=SQUARE, seed=seed, lens=lens,
+                   show_progress=False)
+    print(f"  rendered {family} {condition}: {n} images in {time.perf_counter() - t:.0f} s", flush=True)
+    truth = json.loads((src / "truth.json").read_text())
+    size = tuple(truth["imagersize"])
+    files = [im["file"] for im in truth["images"]]
+    partial = {}
+    ours_det, _ = bd.run_ours(src, files, BOARD, partial=partial)
+    cv_det, _ = bd.run_opencv(src, files, BOARD)
+    mg_det, _ = bd.run_mrgingham(src, files, BOARD, work / "mg8")
+    files8 = bi.to8bit(src, work / f"{family}_{condition}_8")
+    solves = {"ours": bi.run_ours(src, work / f"ours_{family}_{condition}", "mrcal"),
+              "OpenCV SB + fisheye": bi.run_opencv(files8),
+              "mrgingham + mrcal-cc": bi.run_mrgingham(work / f"{family}_{condition}_8",
+                                                       work / f"mrcal_{family}_{condition}")}
+    rows = []
+    for name, det in (("ours", ours_det), ("OpenCV SB + fisheye", cv_det), ("mrgingham + mrcal-cc", mg_det)):
+        ev = bd.evaluate(src, truth, det)
+        proj, _, info = solves[name]
+        rows.append(dict(family=family, condition=condition, method=name, full=ev["full"], found=ev["found"],
+                         rms=ev["rms"], over1=ev["wrong"],
+                         wild=wild_corners(truth, partial) if name == "ours" else None,
+                         model=model_error(proj, lens, size), info=info))
+    return rows
+
+
+def fmt(r: dict) -> str:
+    m = r["model"]
+    model = f"{m[0]:.3f} / {m[1]:.3f}" if m else f"failed ({str(r['info'].get('error', r['info']))[:60]})"
+    wild = "" if r["wild"] is None else str(r["wild"])
+    return (f"| {r['family']} | {r['condition']} | {r['method']} | {r['found']}/{r['full']} "
+            f"({100 * r['found'] / max(r['full'], 1):.0f} %) | {r['rms']:.3f} | {r['over1']} | {wild} | {model} |")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--n", type=int, default=20)
+    ap.add_argument("--seed", type=int, default=11)
+    ap.add_argument("--families", default=",".join(FAMILIES))
+    ap.add_argument("--conditions", default="real,hard")
+    ap.add_argument("--work", type=Path, default=None, help="work folder to keep (default: a temp folder)")
+    args = ap.parse_args(argv)
+    work = args.work or Path(tempfile.mkdtemp(prefix="bench_calib_lenses."))
+    work.mkdir(parents=True, exist_ok=True)
+    print(f"{args.n} images per set, board {BOARD[0]}x{BOARD[1]}, seed {args.seed}, work {work}", flush=True)
+    rows = []
+    for family in args.families.split(","):
+        for condition in args.conditions.split(","):
+            rows += run_set(family, condition, args.n, args.seed, work)
+            for r in rows[-3:]:
+                print(fmt(r), flush=True)
+    print("\n| truth lens | condition | method | complete | corner RMS px | > 1 px | > 3 px (all boards) "
+          "| model error whole / central 80 % px |")
+    print("|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(fmt(r))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
