@@ -9,7 +9,12 @@
    frames a camera would mis-read. There is no other tool runnable here, so the comparison is of
    correctness, not speed.
 
-Run: .venv/bin/python bench/bench_boson.py [--round-trips N]
+4. the two-camera set-up (`boson-config --slave`, a new process, the same emulators in their own
+   process) by this code and by the previous Boson code (`git archive HEAD` of platform_tools/boson and
+   the boson commands, i.e. before issue 17's changes, over a copy of the rest of this tree), without faults, on a noisy link, and on a slow camera (every reply
+   0.5 s late with --timeout 0.33: the issue's 1.5 s camera with the default 1 s timeout, scaled by 1/3).
+
+Run: .venv/bin/python bench/bench_boson.py [--round-trips N] [--base-rev REV]
 """
 from __future__ import annotations
 
@@ -17,6 +22,7 @@ import argparse
 import io
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -45,9 +51,12 @@ def start_emulators(by_id: str) -> subprocess.Popen:
 
 
 def reset_emulators(by_id: str) -> None:
+    """Back to factory sync and telemetry, so every timed run has the same changes to make."""
     for sn in SERIALS:
-        with BosonClient(SerialTransport(f"{by_id}/usb-FLIR_Boson_{sn}-if00")) as c:
+        with BosonClient(SerialTransport(f"{by_id}/usb-FLIR_Boson_{sn}-if00"), retries=10) as c:
             c.call(C.SET_EXT_SYNC, "disable")
+            c.call(C.SET_TELEMETRY, "disabled")
+            c.call(C.SET_TELEMETRY_LOCATION, "top")
 
 
 def bench_round_trips(by_id: str, n: int) -> float:
@@ -92,6 +101,72 @@ def bench_config_inprocess(by_id: str, runs: int) -> float:
     return min(times)
 
 
+#: link conditions of the set-up comparison: name -> (emulator --faults, extra boson-config options)
+SETUP_CASES = {
+    "no faults": ("", []),
+    "noisy link (split, garbage, stale, bad CRC, busy)":
+        ("split,garbage:p=0.3,wrongseq:p=0.3,badcrc:p=0.2,busy:p=0.2", ["--retries", "6"]),
+    "slow camera (0.5 s replies, --timeout 0.33)": ("delay:s=0.5", ["--timeout", "0.33"]),
+}
+
+
+def export_base(rev: str, into: str) -> str:
+    """The previous Boson code on today's everything else: a copy of this tree's platform_tools and config,
+    with platform_tools/boson and the two boson commands replaced by ``rev``'s (read-only git: `git
+    archive`), so the comparison is of the Boson code alone, not of the rig loader or rig.yaml."""
+    shutil.copytree(REPO / "platform_tools", Path(into) / "platform_tools",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(REPO / "config", Path(into) / "config")
+    shutil.rmtree(Path(into) / "platform_tools" / "boson")
+    data = subprocess.run(["git", "archive", rev, "platform_tools/boson", "platform_tools/cli/boson_cmd.py",
+                           "platform_tools/cli/boson_emulator_cmd.py"], cwd=REPO, capture_output=True,
+                          check=True).stdout
+    subprocess.run(["tar", "-x", "-C", into], input=data, check=True)
+    return into
+
+
+def _requests(log: Path) -> int:
+    """Requests the emulators received so far (their session log)."""
+    try:
+        return sum(1 for line in log.read_text().splitlines() if '"dir": "rx"' in line)
+    except OSError:
+        return 0
+
+
+def bench_setup_cases(base_dir: str, runs: int) -> list[tuple]:
+    """(case, this code s, exit, requests per camera, previous code s, exit, requests per camera): the best
+    of ``runs`` seconds, emulators restarted per case."""
+    out = []
+    for name, (faults, extra) in SETUP_CASES.items():
+        with tempfile.TemporaryDirectory(prefix="bench-boson-setup.") as by_id:
+            log = Path(by_id) / "session.log"
+            cmd = PT + ["boson-emulator", "--by-id-dir", by_id, "--serial", str(SERIALS[0]), "--serial",
+                        str(SERIALS[1]), "--log", str(log)] + (["--faults", faults] if faults else [])
+            proc = subprocess.Popen(cmd, cwd=REPO, stdout=subprocess.PIPE, text=True)
+            for _ in SERIALS:
+                proc.stdout.readline()
+            try:
+                row = [name]
+                for where in (str(REPO), base_dir):
+                    env = dict(os.environ, PLATFORM_TOOLS_BOSON_BY_ID=by_id, PYTHONPATH=where)
+                    best, code, requests = float("inf"), None, 0
+                    for _ in range(runs):
+                        reset_emulators(by_id)
+                        n0 = _requests(log)
+                        t0 = time.perf_counter()
+                        r = subprocess.run([sys.executable, "-m", "platform_tools.cli.main", "boson-config",
+                                            "--slave", *RIG, *extra, "--json"], cwd=where, env=env,
+                                           capture_output=True, text=True)
+                        best, code = min(best, time.perf_counter() - t0), r.returncode
+                        requests = _requests(log) - n0
+                    row += [best, code, requests / len(SERIALS)]
+                out.append(tuple(row))
+            finally:
+                proc.terminate()
+                proc.wait(timeout=10)
+    return out
+
+
 def flirpy_style_frame(seq: int, fid: int, payload: bytes) -> bytes:
     """As the reference describes flirpy: header and CRC sent unescaped (payload escaped)."""
     header = bytes([0]) + seq.to_bytes(4, "big") + fid.to_bytes(4, "big") + (0xFFFFFFFF).to_bytes(4, "big")
@@ -134,7 +209,10 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--round-trips", type=int, default=3000)
     ap.add_argument("--config-runs", type=int, default=3)
+    ap.add_argument("--base-rev", default="HEAD", help="the previous code to compare the set-up with")
     args = ap.parse_args()
+    with tempfile.TemporaryDirectory(prefix="bench-boson-base.") as base:
+        setup = bench_setup_cases(export_base(args.base_rev, base), runs=3)
     with tempfile.TemporaryDirectory(prefix="bench-boson.") as by_id:
         proc = start_emulators(by_id)
         try:
@@ -154,6 +232,14 @@ def main() -> int:
     print(f"{'  of which Python start-up and imports (s)':58s} {startup:14.3f}")
     print(f"{'boson-config --slave, 2 cameras, verify, in-process (s)':58s} {cfg_inproc:14.3f} {'< 1.0':>12s} "
           f"{1.0 / cfg_inproc:7.1f}x")
+    print(f"\nTwo-camera set-up, boson-config --slave, new process, best of 3 (s; exit code), previous code = "
+          f"{args.base_rev}:")
+    print(f"{'link':52s} {'this code':>20s} {'previous':>20s} {'ratio':>6s}")
+    for name, ours, code, n_ours, base_s, base_code, n_base in setup:
+        print(f"{name:52s} {ours:6.2f} ({code}) {n_ours:4.0f} req {base_s:6.2f} ({base_code}) {n_base:4.0f} req "
+              f"{base_s / ours:5.2f}x")
+    print("(req: requests each camera received in the last run, the reset before it not counted; this code "
+          "asks each port its serial and reads back every setting)")
     print("\nFraming correctness (request frames a camera would mis-read, counts; no reference tool runs here):")
     print(f"{'':58s} {'this tool':>14s} {'flirpy-style':>12s}")
     print(f"{'every command x 5 payload values, sequence 0 / 1 (%d frames)' % fr['cases']:58s} "

@@ -1,7 +1,9 @@
 """The Boson part of the pre-flight, through the Boson tooling (platform_tools.boson): each camera
 answers on its serial port with the expected serial number, its frame counter advances at the
 trigger rate, its external sync mode is the configured one, and its telemetry rows (where the FFC
-status is read from) are on when the rig records them."""
+status is read from) are on when the rig records them, at the location the FFC decoder reads them from
+(platform_tools.boson.telemetry.EXPECTED_LOCATION): rows at the top while the decoder reads the bottom
+give every frame of a recording a wrong FFC status."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -11,13 +13,14 @@ from platform_tools.boson.codes import BosonError
 from platform_tools.boson.discovery import Target
 from platform_tools.boson.operations import measure_frame_rate, open_client, read_info
 from platform_tools.boson.syncsetup import SYNC_MODES
+from platform_tools.boson.telemetry import EXPECTED_LOCATION
 from platform_tools.rig import Rig
 from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
 
 #: how far (a fraction of sync.rate_hz) a camera's measured frame rate may be from the trigger's
 TRIGGER_TOLERANCE = 0.2
 #: what the pre-flight reads of each camera (platform_tools.boson.operations.INFO)
-PROBE_KEYS = ("serial", "firmware", "sync_mode", "telemetry")
+PROBE_KEYS = ("serial", "firmware", "sync_mode", "telemetry", "telemetry_location")
 
 
 def _target(rig: Rig, side: str, dev_dir: Path, found: list[discovery.Found]) -> Target:
@@ -39,6 +42,7 @@ def probe(target: Target, window_s: float) -> dict:
         rate = measure_frame_rate(client, window_s)
     return {"serial": info["serial"], "firmware": info["firmware"], "port": target.port,
             "sync_mode": str(info["sync_mode"]), "telemetry": str(info["telemetry"]),
+            "telemetry_location": str(info["telemetry_location"]),
             "frame_rate_hz": round(rate, 2)}
 
 
@@ -63,6 +67,9 @@ def checks(rig: Rig, dev_dir: Path, cameras: dict) -> list[Check]:
             sync_bad.append(f"{side} is {info['sync_mode']}")
         if want_telemetry and info["telemetry"] != "enabled":
             telemetry_bad.append(f"{side} is {info['telemetry']}")
+        elif want_telemetry and info["telemetry_location"] != EXPECTED_LOCATION:
+            telemetry_bad.append(f"{side} has its rows at the {info['telemetry_location']}, the FFC decoder reads "
+                                 f"the {EXPECTED_LOCATION}")
         if abs(info["frame_rate_hz"] - rate) > TRIGGER_TOLERANCE * rate:
             trig_bad.append(f"{side} at {info['frame_rate_hz']:.1f} Hz")
     out = [Check("thermal cameras", FAILED if problems else OK,
@@ -79,9 +86,9 @@ def checks(rig: Rig, dev_dir: Path, cameras: dict) -> list[Check]:
                      f"`platform_tools boson-config`" if sync_bad else f"{want_mode} as configured"))
     if want_telemetry:
         out.append(Check("telemetry", FAILED if telemetry_bad else OK,
-                         f"{', '.join(telemetry_bad)}: the recording would carry no FFC status "
+                         f"{', '.join(telemetry_bad)}: the recording would carry no FFC status or a wrong one "
                          f"(on_device.thermal_telemetry_rows); run `platform_tools boson-config`" if telemetry_bad
-                         else "on: the FFC status is recorded from the telemetry rows"))
+                         else f"on, rows at the {EXPECTED_LOCATION}: the FFC status is recorded from them"))
     else:
         out.append(Check("telemetry", SKIPPED, "on_device.thermal_telemetry_rows is 0"))
     return out

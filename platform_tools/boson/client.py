@@ -2,10 +2,18 @@
 ``loopback.LoopbackTransport``): sequence numbers, reply matching, retries with back-off, reboot.
 
 ``call(command, *args)`` sends a request and returns the decoded reply value. A reply must echo the
-request's channel, sequence number and function id; anything else (a late reply to an earlier
-request, another channel) is discarded. No reply, a corrupt reply, and the transient results
-CamBusy / NotReady are retried a bounded number of times with exponential back-off; a port that
-vanishes mid-command is re-opened (the by-id path follows the camera) and the command retried.
+request's channel, sequence number and function id: the current attempt's, or an earlier attempt's of
+the same call (a slow camera's late reply answers the same command); anything else is discarded. No
+reply, a corrupt reply, and the transient results CamBusy / NotReady are retried a bounded number of
+times with exponential back-off; a port that vanishes mid-command is re-opened (the by-id path follows
+the camera) and the command retried.
+
+Noise is not a failure by itself: a malformed frame (noise holding the start byte 0x8E, a bad CRC) is
+remembered, and the client keeps reading for ``Timeouts.resync_s`` for a valid reply before it calls
+the reply bad. Time adapts to the camera: a reply that arrives after its attempt timed out still answers
+the call (taken during the next attempt), and every call waits at least ``Timeouts.adapt`` times the
+slowest reply latency seen recently (capped at ``Timeouts.max_first_s``), so a slow camera costs its
+latency, not a timeout and a retry per command; a dead one costs (retries + 1) x the timeout, as before.
 """
 from __future__ import annotations
 
@@ -31,6 +39,12 @@ class Timeouts:
     rest_s: float = 2.0
     slow_s: float = 5.0
     reopen_s: float = 15.0
+    #: after a malformed frame, how long to keep reading for a valid reply
+    resync_s: float = 0.02
+    #: a call waits at least this many times the slowest recent reply latency ...
+    adapt: float = 2.0
+    #: ... and never more than this for a first byte
+    max_first_s: float = 8.0
 
     def first_for(self, cmd: C.Command | None) -> float:
         return self.slow_s if cmd is not None and cmd.speed == C.SLOW else self.first_s
@@ -61,6 +75,7 @@ class BosonClient:
         self._seq = first_sequence - 1
         self.stats = Stats()
         self._decoder = fslp.StreamDecoder()
+        self.latency_s = 0.0      # the slowest reply latency of the recent calls (decays by half per call)
 
     # ------------------------------------------------------------------ lifecycle
     def open(self) -> "BosonClient":
@@ -86,20 +101,29 @@ class BosonClient:
         return self._seq
 
     # ------------------------------------------------------------------ one exchange
-    def exchange(self, sequence: int, function_id: int, payload: bytes, first_s: float) -> fslp.Frame:
-        """Send one request and wait for its reply. Raises ReplyTimeout, BadReply or PortGone."""
+    def exchange(self, sequence: int, function_id: int, payload: bytes, first_s: float, *,
+                 accept: dict[int, float] | None = None, flush: bool = True) -> fslp.Frame:
+        """Send one request and wait for its reply (or a late reply to a sequence in ``accept``, which
+        maps the earlier attempts' sequence numbers to when they were sent). Raises ReplyTimeout,
+        BadReply or PortGone."""
         raw = fslp.request(sequence, function_id, payload)
-        self.transport.flush_input()
-        self._decoder.reset()
+        if flush:
+            self.transport.flush_input()
+            self._decoder.reset()
         self.transport.write(raw)
         if self.hook:
             self.hook("tx", raw)
         t0 = time.monotonic()
+        sent = dict(accept or {})
+        sent[sequence] = t0
         deadline = t0 + first_s
         got_bytes = False
+        bad: fslp.FslpError | None = None
         while True:
             remaining = deadline - time.monotonic()
             if remaining <= 0:
+                if bad is not None:
+                    raise BadReply(f"{self.label}: garbled reply to 0x{function_id:08X} ({bad})")
                 raise ReplyTimeout(f"{self.label}: no reply to 0x{function_id:08X} within "
                                    f"{time.monotonic() - t0:.2f} s")
             data = self.transport.read(remaining)
@@ -112,44 +136,64 @@ class BosonClient:
                 deadline = max(deadline, time.monotonic() + self.timeouts.rest_s)
             for item in self._decoder.feed(data):
                 if isinstance(item, fslp.FslpError):
+                    # noise or a corrupt frame: a valid reply may still follow at once (resynchronise)
                     self.stats.bad_frames += 1
-                    raise BadReply(f"{self.label}: garbled reply to 0x{function_id:08X} ({item})")
-                if (item.channel, item.sequence, item.function_id) == (fslp.CHANNEL_COMMAND, sequence,
-                                                                       function_id) and not item.is_request:
+                    bad = item
+                    deadline = min(deadline, time.monotonic() + self.timeouts.resync_s)
+                    continue
+                if (item.channel, item.function_id) == (fslp.CHANNEL_COMMAND, function_id) \
+                        and item.sequence in sent and not item.is_request:
+                    self.latency_s = max(self.latency_s, time.monotonic() - sent[item.sequence])
                     return item
                 self.stats.discarded += 1
                 log.debug("%s: discarded a frame (seq %d, id 0x%08X) while waiting for seq %d",
                           self.label, item.sequence, item.function_id, sequence)
 
     # ------------------------------------------------------------------ a command, with retries
+    def first_byte_timeout(self, command: C.Command | None) -> float:
+        """The configured first-byte timeout, or more for a camera seen to be slow (capped)."""
+        base = self.timeouts.first_for(command)
+        return min(max(base, self.timeouts.adapt * self.latency_s), max(base, self.timeouts.max_first_s))
+
     def call_raw(self, function_id: int, payload: bytes = b"", *, command: C.Command | None = None,
                  retries: int | None = None) -> bytes:
         name = command.name if command else f"0x{function_id:08X}"
         retries = self.retries if retries is None else retries
-        first_s = self.timeouts.first_for(command)
+        first_s = self.first_byte_timeout(command)
+        self.latency_s /= 2          # decays: a camera that got fast again is not waited for forever
         self.stats.calls += 1
         last: Exception | None = None
+        sent: dict[int, float] = {}   # this call's attempts: a late reply to any of them answers it
+        flush = True
         for attempt in range(retries + 1):
             if attempt:
                 self.stats.retries += 1
                 time.sleep(self.backoff_s * (2 ** (attempt - 1)))
+            seq = self.next_sequence()
             try:
-                frame = self.exchange(self.next_sequence(), function_id, payload, first_s)
+                frame = self.exchange(seq, function_id, payload, first_s, accept=sent, flush=flush)
             except PortGone as exc:
-                last = exc
+                last, sent, flush = exc, {}, True
                 log.info("%s: port lost during %s; waiting for it to come back", self.label, name)
                 self.transport.reopen(self.timeouts.reopen_s)
                 self.stats.reopens += 1
                 continue
-            except (ReplyTimeout, BadReply) as exc:
-                last = exc
+            except ReplyTimeout as exc:
+                last, flush = exc, False     # keep what arrives late: it may be the reply
+                sent[seq] = time.monotonic() - first_s
+                # no growth of first_s here: the late reply is taken on the next attempt anyway, and a
+                # dead camera must cost (retries + 1) x the timeout, not a geometric series
+                log.info("%s: %s (attempt %d of %d)", self.label, exc, attempt + 1, retries + 1)
+                continue
+            except BadReply as exc:
+                last, sent, flush = exc, {}, True
                 log.info("%s: %s (attempt %d of %d)", self.label, exc, attempt + 1, retries + 1)
                 continue
             if frame.status == 0:
                 return frame.payload
             err = error_for(frame.status, name, self.label)
             if err.transient and attempt < retries:
-                last = err
+                last, sent, flush = err, {}, True
                 log.info("%s: %s; retrying", self.label, err)
                 continue
             raise err

@@ -160,6 +160,10 @@ class PortBusy(TransportError):
     pass
 
 
+#: a port that cannot be opened is bad input (exit 2), not a failed check: the user names or fixes it
+PORT_PROBLEMS = (PortNotFound, PortPermission, PortBusy)
+
+
 class PortGone(TransportError):
     """The port vanished (camera rebooted or unplugged) and did not come back in time."""
 

@@ -176,13 +176,20 @@ _TABLE = [
     Command("telemetrySetState", 0x00040001, request=">i", enum=TelemetryState),
     Command("telemetryGetState", 0x00040002, reply=">i", enum=TelemetryState),
     Command("telemetrySetLocation", 0x00040003, request=">i", enum=TelemetryLocation),
+    # the getter's id is the SDK's (issue 17, read against FLIR's SDK for Python); reply layout as the setter's
+    Command("telemetryGetLocation", 0x00040004, reply=">i", enum=TelemetryLocation),
     Command("telemetrySetPacking", 0x00040005, request=">i", enum=TelemetryPacking),
+    # INFERRED getter ids below (set id + 1, the pattern of every confirmed set/get pair in this table):
+    # not read in a public source here; a camera that answers BadCommandId (0x161) disproves one
+    Command("telemetryGetPacking", 0x00040006, reply=">i", enum=TelemetryPacking, doc="inferred id"),
     Command("sysctrlSetUsbVideoIR16Mode", 0x000E000D, request=">i", enum=Ir16Mode),
     Command("sysctrlGetUsbVideoIR16Mode", 0x000E000E, reply=">i", enum=Ir16Mode),
     Command("dvoSetOutputFormat", 0x00060006, request=">i", enum=DvoOutputFormat),
+    Command("dvoGetOutputFormat", 0x00060007, reply=">i", enum=DvoOutputFormat, doc="inferred id"),
     Command("dvoSetDisplayMode", 0x0006000D, request=">i", enum=DisplayMode),
     Command("dvoGetDisplayMode", 0x0006000E, reply=">i", enum=DisplayMode),
     Command("colorLutSetId", 0x000B0003, request=">i"),
+    Command("colorLutGetId", 0x000B0004, reply=">i", doc="inferred id"),
     Command("agcSetMode", 0x00090033, request=">i"),
     Command("agcGetMode", 0x00090032, reply=">i"),
 ]
@@ -213,9 +220,16 @@ GET_FRAME_COUNT = BY_NAME["bosonGetISPFrameCount"]
 GET_TELEMETRY = BY_NAME["telemetryGetState"]
 SET_TELEMETRY = BY_NAME["telemetrySetState"]
 SET_TELEMETRY_LOCATION = BY_NAME["telemetrySetLocation"]
+GET_TELEMETRY_LOCATION = BY_NAME["telemetryGetLocation"]
+SET_TELEMETRY_PACKING = BY_NAME["telemetrySetPacking"]
+GET_TELEMETRY_PACKING = BY_NAME["telemetryGetPacking"]
 GET_IR16 = BY_NAME["sysctrlGetUsbVideoIR16Mode"]
 SET_DISPLAY_MODE = BY_NAME["dvoSetDisplayMode"]
 GET_DISPLAY_MODE = BY_NAME["dvoGetDisplayMode"]
+
+#: commands that write the camera's flash, erase it, or reboot it: `boson-raw` sends them only with --yes
+FLASH_OR_REBOOT = frozenset(BY_NAME[n].function_id for n in (
+    "bosonWriteDynamicHeaderToFlash", "bosonRestoreFactoryDefaultsFromFlash", "bosonReboot"))
 
 
 def enum_name(value: Any) -> Any:

@@ -21,7 +21,7 @@ log = logging.getLogger(__name__)
 USB_VID, USB_PID = 0x09CB, 0x4007
 BY_ID_ENV = "PLATFORM_TOOLS_BOSON_BY_ID"
 V4L_ENV = "PLATFORM_TOOLS_BOSON_V4L_BY_ID"
-_SERIAL_LINK = re.compile(r"^usb-FLIR_Boson_(\d+)-if0?0$")
+_SERIAL_LINK = re.compile(r"^usb-FLIR_Boson_(.+)-if0?0$")   # the USB serial string: digits, or not
 _VIDEO_LINK = "usb-FLIR_Boson_{sn}-video-index0"
 
 
@@ -35,7 +35,7 @@ def v4l_dir() -> Path:
 
 @dataclass(frozen=True)
 class Found:
-    serial: int | None      # USB serial string / by-id name; confirmed with bosonGetCameraSN on use
+    serial: int | None      # the USB serial string (by-id name), if numeric: a hint; identity.py asks the camera
     port: str               # the name to open: the by-id link when there is one
     device: str             # what it resolves to (/dev/ttyACM0, /dev/pts/5)
     video: str | None       # /dev/videoN, when its by-id link exists
@@ -70,7 +70,7 @@ def _from_by_id() -> list[Found]:
         link = folder / name
         if not link.exists():          # dangling: the camera is re-enumerating
             continue
-        sn = int(m.group(1))
+        sn = int(m.group(1)) if m.group(1).isdigit() else None
         out.append(Found(sn, str(link), os.path.realpath(link), _video_for(sn), "by-id"))
     return out
 

@@ -25,7 +25,7 @@ CRC_INIT = 0x1D0F
 _HEADER = struct.Struct(">BIII")
 HEADER_SIZE = _HEADER.size   # 13
 CRC_SIZE = 2
-MAX_BODY = 2048              # longer than any command frame; a guard against runaway input
+MAX_BODY = 2048              # bytes of an unescaped body, CRC included: the one limit of encoder and decoder
 
 
 class FslpError(Exception):
@@ -125,6 +125,8 @@ def reply(req: Frame, status: int, payload: bytes = b"") -> Frame:
 
 
 def decode_body(body: bytes) -> Frame:
+    if len(body) > MAX_BODY:
+        raise FramingError(f"frame body of {len(body)} bytes is longer than the {MAX_BODY}-byte limit")
     if len(body) < HEADER_SIZE + CRC_SIZE:
         raise FramingError(f"frame body of {len(body)} bytes is shorter than the "
                            f"{HEADER_SIZE + CRC_SIZE}-byte minimum")

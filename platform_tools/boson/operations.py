@@ -14,7 +14,7 @@ from typing import Any, Callable, Sequence, TypeVar
 
 from . import commands as C
 from .client import BosonClient, Timeouts
-from .codes import BosonError, CameraError
+from .codes import PORT_PROBLEMS, BosonError, CameraError
 from .discovery import Target
 from .transport import SerialTransport
 
@@ -36,10 +36,19 @@ def per_camera(targets: Sequence[Target], work: Callable[[Target], T]) -> list[T
 def on_camera(target: Target, timeouts: Timeouts, retries: int, work: Callable[[BosonClient], dict],
               **row: Any) -> dict:
     """Open the target, ``row.update(work(client))``, close; a BosonError becomes ``row["error"]``.
-    The row starts with the target's label and port (and the keyword arguments)."""
+    The row starts with the target's label and port (and the keyword arguments); a port that cannot be
+    opened (missing, denied, in use) also sets ``row["port_problem"]`` (bad input: exit 2)."""
     out: dict = {"label": target.label, "port": target.port, **row}
     try:
-        with open_client(target, timeouts, retries) as client:
+        client = open_client(target, timeouts, retries)
+    except PORT_PROBLEMS as exc:
+        out["error"], out["port_problem"] = str(exc), True
+        return out
+    except BosonError as exc:
+        out["error"] = str(exc)
+        return out
+    try:
+        with client:
             out.update(work(client))
     except BosonError as exc:
         out["error"] = str(exc)
@@ -68,6 +77,8 @@ INFO: dict[str, tuple[C.Command, Callable[[Any], Any]]] = {
     "ffc_status": (C.GET_FFC_STATUS, C.enum_name),
     "gain_mode": (C.GET_GAIN_MODE, C.enum_name),
     "telemetry": (C.GET_TELEMETRY, C.enum_name),
+    "telemetry_location": (C.GET_TELEMETRY_LOCATION, C.enum_name),
+    "telemetry_packing": (C.GET_TELEMETRY_PACKING, C.enum_name),
     "frame_count": (C.GET_FRAME_COUNT, C.enum_name),
 }
 #: what `platform_tools boson-info` shows

@@ -1,14 +1,17 @@
-"""Safe set-up of one camera: read, diff, apply only what differs, read back and verify, check the
-trigger, persist, and revert to what was read if any step fails.
+"""What the set-up of external sync wants of each camera, and its steps on one camera: the plan from
+the rig description, the settings (each with its getter, so everything written is read back), read,
+diff, apply, verify, check the trigger, write flash. The transaction over the whole rig (all
+cameras configured or all put back) is platform_tools.boson.transaction.
 
-Nothing here raises for a camera problem: :func:`configure` returns a :class:`CameraResult` whose
-``status`` says in which state the camera was left:
+A camera's :class:`CameraResult` ``status`` says in which state the run left it:
 
 - ``unchanged``     it already had the wanted settings (nothing written)
 - ``would-change``  dry run: ``changes`` lists what would be written
 - ``configured``    changes applied and verified by reading back (and persisted if asked)
-- ``reverted``      a step failed; the settings read at the start were put back and verified
-- ``error``         it could not be read at all; nothing was written
+- ``aborted``       another camera failed before this one was changed: nothing written
+- ``reverted``      a step failed on some camera; this one's settings read at the start were put back
+                    (and its flash, if this run wrote it) and verified
+- ``error``         it could not be read at all; nothing written
 - ``failed``        a step failed and the revert could not be verified: ``after`` is what was last read
 """
 from __future__ import annotations
@@ -20,7 +23,7 @@ from typing import Any
 
 from . import commands as C
 from .client import BosonClient
-from .codes import BosonError, CameraError, IdentityMismatch
+from .codes import BosonError, CameraError
 from .operations import measure_frame_rate
 from .telemetry import EXPECTED_LOCATION
 
@@ -32,19 +35,17 @@ class Setting:
     key: str
     get: C.Command
     set: C.Command
-    #: commands sent just before this setting is written, for companions that have no getter in the
-    #: protocol reference (so they cannot be diffed or read back): sent only when this setting changes
-    before_set: tuple[tuple[C.Command, IntEnum], ...] = ()
 
 
-SETTINGS: dict[str, Setting] = {
-    "ext_sync_mode": Setting("ext_sync_mode", C.GET_EXT_SYNC, C.SET_EXT_SYNC),
-    "display_mode": Setting("display_mode", C.GET_DISPLAY_MODE, C.SET_DISPLAY_MODE),
-    # telemetry rows carry the FFC status the recorder needs (platform_tools.boson.telemetry); they go
-    # where the decoder expects them before they are switched on
-    "telemetry_state": Setting("telemetry_state", C.GET_TELEMETRY, C.SET_TELEMETRY, before_set=(
-        (C.SET_TELEMETRY_LOCATION, C.TelemetryLocation[EXPECTED_LOCATION.upper()]),)),
-}
+#: every setting the set-up may write, in the order it writes them (the telemetry rows are placed and
+#: packed before they are switched on); each has a getter, so each is diffed and read back
+SETTINGS: dict[str, Setting] = {s.key: s for s in (
+    Setting("ext_sync_mode", C.GET_EXT_SYNC, C.SET_EXT_SYNC),
+    Setting("display_mode", C.GET_DISPLAY_MODE, C.SET_DISPLAY_MODE),
+    Setting("telemetry_location", C.GET_TELEMETRY_LOCATION, C.SET_TELEMETRY_LOCATION),
+    Setting("telemetry_packing", C.GET_TELEMETRY_PACKING, C.SET_TELEMETRY_PACKING),
+    Setting("telemetry_state", C.GET_TELEMETRY, C.SET_TELEMETRY),
+)}
 
 SYNC_MODES = {"slave": C.ExtSyncMode.SLAVE, "master": C.ExtSyncMode.MASTER, "disabled": C.ExtSyncMode.DISABLE}
 
@@ -64,6 +65,14 @@ class Plan:
     dry_run: bool = False
     check_trigger: TriggerCheck | None = None
     reboot_verify: bool = False
+    #: learn what flash holds (reboot: RAM reloads from flash, then read) so flash is written only when it
+    #: differs, RAM/flash differences are reported, and a revert puts the flash back exactly
+    read_flash: bool = False
+
+    @property
+    def keys(self) -> list[str]:
+        """The settings in the order they are written."""
+        return [k for k in SETTINGS if k in self.desired]
 
 
 class StepFailed(BosonError):
@@ -80,9 +89,13 @@ class CameraResult:
     after: dict[str, Any] = field(default_factory=dict)
     changes: list[dict[str, Any]] = field(default_factory=list)
     persisted: bool = False
+    flash_written: bool = False    # this run sent a flash write (even one whose reply was lost)
+    flash_before: dict[str, Any] | None = None   # what flash held at the start (None: not read)
+    flash: dict[str, Any] | None = None          # what flash holds at the end, as far as known
     frame_rate_hz: float | None = None
     warnings: list[str] = field(default_factory=list)
     error: str | None = None
+    port_problem: bool = False     # the port could not be opened (missing, denied, in use): bad input
     steps: list[str] = field(default_factory=list)
 
     @property
@@ -91,8 +104,9 @@ class CameraResult:
 
     def to_dict(self) -> dict:
         d = asdict(self)
-        for k in ("before", "after"):
-            d[k] = {key: C.enum_name(v) for key, v in getattr(self, k).items()}
+        for k in ("before", "after", "flash_before", "flash"):
+            value = getattr(self, k)
+            d[k] = None if value is None else {key: C.enum_name(v) for key, v in value.items()}
         d["ok"] = self.ok
         return d
 
@@ -106,12 +120,14 @@ class CameraResult:
 
 # ---------------------------------------------------------------------------- the plan, from the rig
 def plan_for(rig, *, mode: str | None = None, display_mode: str | None = None, persist: bool | None = None,
-             dry_run: bool = False, check_trigger_s: float | None = None, reboot_verify: bool = False) -> Plan:
+             dry_run: bool = False, check_trigger_s: float | None = None, reboot_verify: bool = False,
+             read_flash: bool | None = None) -> Plan:
     """The plan for the rig (a platform_tools.rig.Rig): external sync ``mode`` ("slave", "master" or
     "disabled"; default sync.boson_mode), telemetry rows on when the rig records them
     (on_device.thermal_telemetry_rows > 0), ``persist`` to flash (default sync.persist), and with
     ``check_trigger_s`` a check that frames arrive at sync.rate_hz over that many seconds (slave only).
-    ``display_mode`` "continuous" or "one-shot" also sets dvoSetDisplayMode. ValueError (one line) for a
+    ``display_mode`` "continuous" or "one-shot" also sets dvoSetDisplayMode. ``read_flash`` (default: when
+    persisting) reboots each camera first to learn what its flash holds. ValueError (one line) for a
     combination that cannot be done."""
     sync = rig.desc.sync
     mode = mode or sync.boson_mode
@@ -119,6 +135,9 @@ def plan_for(rig, *, mode: str | None = None, display_mode: str | None = None, p
     if display_mode:
         desired["display_mode"] = C.DisplayMode[display_mode.upper().replace("-", "_")]
     if rig.desc.on_device.thermal_telemetry_rows > 0:  # the rig records FFC status from telemetry rows
+        # where and how platform_tools.boson.telemetry reads them, then on
+        desired["telemetry_location"] = C.TelemetryLocation[EXPECTED_LOCATION.upper()]
+        desired["telemetry_packing"] = C.TelemetryPacking.DEFAULT
         desired["telemetry_state"] = C.TelemetryState.ENABLED
     persist = sync.persist if persist is None else persist
     if check_trigger_s is not None and check_trigger_s <= 0:
@@ -130,7 +149,10 @@ def plan_for(rig, *, mode: str | None = None, display_mode: str | None = None, p
         if mode != "slave":
             raise ValueError("--check-trigger applies to --slave (frames per trigger pulse)")
         check = TriggerCheck(rate_hz=sync.rate_hz, window_s=check_trigger_s)
-    return Plan(desired, persist=persist, dry_run=dry_run, check_trigger=check, reboot_verify=reboot_verify)
+    if read_flash is None:   # flash matters when it is written, and when slave left in it would mean no video
+        read_flash = persist or mode != "slave"
+    return Plan(desired, persist=persist, dry_run=dry_run, check_trigger=check, reboot_verify=reboot_verify,
+                read_flash=read_flash)
 
 
 def plan_warnings(plan: Plan, rig) -> list[str]:
@@ -149,6 +171,7 @@ def plan_warnings(plan: Plan, rig) -> list[str]:
 def summary(plan: Plan, results: list[CameraResult], warnings: list[str]) -> dict:
     """The plan and every camera's result, as `boson-config --json` prints it."""
     return {"mode": C.enum_name(plan.desired["ext_sync_mode"]), "persist": plan.persist, "dry_run": plan.dry_run,
+            "read_flash": plan.read_flash,
             "check_trigger": plan.check_trigger is not None, "ok": all(r.ok for r in results),
             "warnings": warnings, "cameras": [r.to_dict() for r in results]}
 
@@ -164,9 +187,6 @@ def diff(current: dict[str, Any], desired: dict[str, IntEnum]) -> list[tuple[str
 
 def apply(client: BosonClient, changes, result: CameraResult) -> None:
     for key, _, value in changes:
-        for command, companion in SETTINGS[key].before_set:
-            client.call(command, companion)
-            result.steps.append(f"{command.name} {C.enum_name(companion)} (not read back: no getter)")
         client.call(SETTINGS[key].set, value)
         result.steps.append(f"set {key} {C.enum_name(value)}")
 
@@ -190,92 +210,27 @@ def check_trigger(client: BosonClient, check: TriggerCheck, result: CameraResult
                          f"+-{check.tolerance:.0%} ({why})")
 
 
-def persist(client: BosonClient, desired: dict[str, Any], result: CameraResult) -> None:
+def write_flash(client: BosonClient, result: CameraResult) -> None:
+    """Save RAM as the power-on defaults. A flash write that reports an error is soft (one public
+    integration saw the setting persist anyway): a warning, and the caller verifies by reading back."""
+    result.flash_written = True        # before sending: a write whose reply is lost may have happened
     try:
         client.call(C.WRITE_FLASH)
         result.steps.append("wrote settings to flash")
     except CameraError as exc:
-        # one public integration saw this fail while the setting still persisted: soft, verify below
         result.warnings.append(f"flash write reported {exc.result_name} (0x{exc.code:03X}); "
-                               "settings read back below; confirm after a power cycle")
+                               "settings read back; confirm after a power cycle")
         result.steps.append(f"flash write reported {exc.result_name}")
-    verify(client, desired, "after the flash write")
-    result.persisted = True
+
+
+def read_flash(client: BosonClient, keys, result: CameraResult) -> dict[str, Any]:
+    """What flash holds for ``keys``: reboot (RAM reloads from flash) and read. RAM is then the flash's."""
+    client.reboot()
+    result.steps.append("rebooted to read flash")
+    return read_settings(client, keys)
 
 
 def reboot_and_verify(client: BosonClient, desired: dict[str, Any], result: CameraResult) -> None:
     client.reboot()
     result.steps.append("rebooted")
     verify(client, desired, "after a reboot (the flash did not keep the settings)")
-
-
-# ---------------------------------------------------------------------------- one camera
-def configure(client: BosonClient, target_serial: int | None, plan: Plan, result: CameraResult) -> CameraResult:
-    """Run the plan on one open camera; fills and returns ``result``."""
-    keys = list(plan.desired)
-    try:
-        sn = client.call(C.GET_CAMERA_SN)
-        result.serial = sn
-        if target_serial is not None and sn != target_serial:
-            raise IdentityMismatch(f"{result.port} answers as SN {sn}, not SN {target_serial} as the rig says")
-        before = read_settings(client, keys)
-    except BosonError as exc:
-        result.status, result.error = "error", str(exc)
-        return result
-    result.before = before
-    changes = diff(before, plan.desired)
-    result.changes = [{"setting": k, "from": C.enum_name(a), "to": C.enum_name(b)} for k, a, b in changes]
-    if plan.dry_run:
-        result.status = "would-change" if changes or plan.persist else "unchanged"
-        result.after = dict(before)
-        return result
-    if not changes and not plan.persist and plan.check_trigger is None:
-        result.status, result.after = "unchanged", dict(before)
-        return result
-    reopens = client.reopens
-    flash_written = False
-    try:
-        apply(client, changes, result)
-        try:
-            result.after = verify(client, plan.desired, "read-back after applying")
-        except StepFailed:
-            if client.reopens == reopens:
-                raise
-            # the camera rebooted while we worked: RAM came back from flash; apply once more
-            result.warnings.append("the camera re-enumerated during set-up; settings applied again")
-            apply(client, diff(read_settings(client, keys), plan.desired), result)
-            result.after = verify(client, plan.desired, "read-back after re-applying")
-        if plan.check_trigger is not None:
-            check_trigger(client, plan.check_trigger, result)
-        if plan.persist:
-            flash_written = True
-            persist(client, plan.desired, result)
-            if plan.reboot_verify:
-                reboot_and_verify(client, plan.desired, result)
-        result.status = "configured" if changes or plan.persist else "unchanged"
-        return result
-    except BosonError as exc:
-        result.error = str(exc)
-        revert(client, before, flash_written, result)
-        return result
-
-
-def revert(client: BosonClient, before: dict[str, Any], flash_written: bool, result: CameraResult) -> None:
-    """Put back the settings read at the start (and in flash, if this run wrote it); verify."""
-    try:
-        now = read_settings(client, before)
-        apply(client, diff(now, before), result)
-        if flash_written:
-            client.call(C.WRITE_FLASH)
-            result.steps.append("wrote the previous settings to flash")
-            result.persisted = False
-        result.after = verify(client, before, "revert")
-        result.status = "reverted"
-        result.steps.append("reverted")
-    except BosonError as exc:
-        result.status = "failed"
-        result.error = f"{result.error}; and the revert failed too: {exc}"
-        try:
-            result.after = read_settings(client, before)
-        except BosonError:
-            result.after = {k: "unknown" for k in before}

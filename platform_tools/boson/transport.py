@@ -80,9 +80,10 @@ class SerialTransport:
     def open(self) -> None:
         try:
             self._ser = serial.Serial(self.path, self.baudrate, timeout=0, write_timeout=2.0, exclusive=True)
+            self._device = os.path.realpath(self.path)
         except (serial.SerialException, OSError, ValueError) as exc:
+            self.close()
             raise _open_error(self.path, exc) from None
-        self._device = os.path.realpath(self.path)
         self.flush_input()
 
     def close(self) -> None:

@@ -9,10 +9,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from platform_tools.boson import discovery, syncsetup
+from platform_tools.boson import commands as C
+from platform_tools.boson import discovery, identity, syncsetup, transaction
 from platform_tools.boson import operations as ops
 from platform_tools.boson.client import Timeouts
-from platform_tools.boson.codes import BosonError
+from platform_tools.boson.codes import PORT_PROBLEMS, BosonError
 from platform_tools.cli import boson_emulator_cmd
 from platform_tools.rig.conventions import (CheckFailed, UserError, add_output_options, add_rig_options, error,
     print_json, rig_from_args)
@@ -40,11 +41,21 @@ def _timeouts(args) -> Timeouts:
 
 
 def _targets(args, rig) -> list[discovery.Target]:
+    """The cameras to work on: ``--port`` as given, else every Boson found, identified by the serial
+    number each answers over its serial link (platform_tools.boson.identity)."""
     found = [] if args.port else discovery.discover()
     try:
-        return discovery.select_targets(str(args.camera), rig, found, args.port)
+        if args.port or not any(f.source != "usb" for f in found):
+            return discovery.select_targets(str(args.camera), rig, found, args.port)
+        timeouts = _timeouts(args)
+        identified = identity.identify(found, lambda t: ops.open_client(t, timeouts, args.retries), ops.per_camera)
+        targets, warnings = identity.assign(str(args.camera), rig, identified, found)
     except discovery.SelectionError as exc:
         raise UserError(str(exc)) from None
+    if not args.quiet:
+        for w in warnings:
+            print(f"platform_tools: warning: {w}", file=sys.stderr)
+    return targets
 
 
 def _on_each(args, rig, work, row=lambda target: {}) -> list[dict]:
@@ -56,11 +67,20 @@ def _on_each(args, rig, work, row=lambda target: {}) -> list[dict]:
 
 
 def _report_errors(rows: list[dict]) -> int:
-    """One error line per failed camera; the exit code (1 when one failed)."""
+    """One error line per failed camera; the exit code (2 when a port could not be opened, 1 when a
+    camera failed, else 0)."""
     for r in rows:
         if "error" in r:
             error(ops.error_line(r))
+    if any(r.get("port_problem") for r in rows):
+        return 2
     return 1 if any("error" in r for r in rows) else 0
+
+
+#: the exit codes, as every boson-* command's --help states them
+EXITS = ("Exit codes: 0 every camera {ok}; 1 a camera failed or did not answer (each camera's row says "
+         "how); 2 bad input: an option, the rig description, no camera found, or a port that does not exist, "
+         "is denied or is in use.")
 
 
 # ---------------------------------------------------------------------------- registration
@@ -70,8 +90,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "the current settings, show the difference, apply only what differs, read "
                                    "back and verify; revert a camera to what was read if any step fails. "
                                    "Defaults come from the rig description's sync section.",
-                       epilog="Exit 0 when every camera ended configured or unchanged, 1 when one failed "
-                              "(each camera's state is reported), 2 for bad input.")
+                       epilog=EXITS.format(ok="ended configured or unchanged (all or nothing: when one "
+                                                  "fails, every camera is put back)"))
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--slave", dest="mode", action="store_const", const="slave",
                       help="external-sync slave: one frame per trigger pulse from the capture card")
@@ -89,6 +109,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="how long --check-trigger counts frames (default 0.5)")
     p.add_argument("--reboot-verify", action="store_true",
                    help="with --persist: reboot each camera and verify the settings came back from flash")
+    p.add_argument("--read-flash", action=argparse.BooleanOptionalAction, default=None,
+                   help="reboot each camera first to learn what its flash holds, so flash is written only "
+                        "when it differs and a revert restores it exactly (default: with --persist, or when "
+                        "leaving slave mode, where slave left in flash means no video at power-up)")
     p.add_argument("--display-mode", choices=["continuous", "one-shot"],
                    help="also set dvoSetDisplayMode (FLIR's ROS sync service sets one-shot with sync; unverified)")
     _add_camera_options(p)
@@ -97,7 +121,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=cmd_config)
 
     p = sub.add_parser("boson-info", help="serials, firmware, temperature, sync/FFC/gain modes of every Boson",
-                       description="Read the identity and state of every connected Boson (or --camera).")
+                       description="Read the identity and state of every connected Boson (or --camera).",
+                       epilog=EXITS.format(ok="answered"))
     _add_camera_options(p)
     add_rig_options(p)
     add_output_options(p)
@@ -105,7 +130,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("boson-ffc", help="run a flat-field correction, or set FFC to auto or manual",
                        description="run: trigger an FFC and wait for it to complete; auto / manual: set the "
-                                   "FFC mode and verify it.")
+                                   "FFC mode and verify it.", epilog=EXITS.format(ok="did it"))
     p.add_argument("action", choices=["run", "auto", "manual"])
     _add_camera_options(p)
     add_rig_options(p)
@@ -114,7 +139,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("boson-restore-defaults", help="restore the Bosons' factory settings",
                        description="Restore the factory settings now (bosonRestoreFactoryDefaultsFromFlash); "
-                                   "with --persist also save them as power-on defaults.")
+                                   "with --persist also save them as power-on defaults. Without --persist "
+                                   "the power-on settings stay what flash held (a warning says so).",
+                       epilog=EXITS.format(ok="restored them"))
     p.add_argument("--yes", action="store_true", help="do it (required: this discards the camera's settings)")
     p.add_argument("--persist", action="store_true", help="also write them to flash")
     _add_camera_options(p)
@@ -124,9 +151,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("boson-raw", help="send any command by function id; print the reply payload",
                        description="Send one FSLP command to one camera: function id (hex) and an optional "
-                                   "payload in hex (big-endian, as the camera expects).")
+                                   "payload in hex (big-endian, as the camera expects).",
+                       epilog=EXITS.format(ok="answered with success") + " A camera's error code is exit 1.")
     p.add_argument("function_id", metavar="0xID")
     p.add_argument("payload", nargs="?", default="", metavar="HEX", help="request payload, e.g. 00000002")
+    p.add_argument("--yes", action="store_true",
+                   help="required for the commands that write or erase flash or reboot the camera "
+                        "(bosonWriteDynamicHeaderToFlash, bosonRestoreFactoryDefaultsFromFlash, bosonReboot)")
     _add_camera_options(p, default="all")
     add_rig_options(p)
     add_output_options(p)
@@ -143,20 +174,38 @@ def _plan(args, rig) -> syncsetup.Plan:
         return syncsetup.plan_for(rig, mode=args.mode, display_mode=args.display_mode, persist=args.persist,
                                   dry_run=args.dry_run,
                                   check_trigger_s=args.check_seconds if args.check_trigger else None,
-                                  reboot_verify=args.reboot_verify)
+                                  reboot_verify=args.reboot_verify, read_flash=args.read_flash)
     except ValueError as exc:
         raise UserError(str(exc)) from None
 
 
-def _configure_one(target, args, plan) -> syncsetup.CameraResult:
-    result = syncsetup.CameraResult(target.label, target.port, target.serial)
+def _configure_rig(targets, args, plan) -> list[syncsetup.CameraResult]:
+    """Open every camera, then run the plan as one transaction; a camera that cannot be opened leaves
+    the others untouched (``aborted``)."""
+    results = [syncsetup.CameraResult(t.label, t.port, t.serial) for t in targets]
+    timeouts = _timeouts(args)
+
+    def open_one(i: int):
+        try:
+            return ops.open_client(targets[i], timeouts, args.retries)
+        except BosonError as exc:
+            results[i].error = str(exc)
+            results[i].port_problem = isinstance(exc, PORT_PROBLEMS)
+            return None
+    clients = ops.per_camera(range(len(targets)), open_one)
     try:
-        client = ops.open_client(target, _timeouts(args), args.retries)
-    except BosonError as exc:
-        result.error = str(exc)
-        return result
-    with client:
-        return syncsetup.configure(client, target.serial, plan, result)
+        if any(c is None for c in clients):
+            bad = ", ".join(t.label for t, c in zip(targets, clients) if c is None)
+            for r, c in zip(results, clients):
+                if c is not None:
+                    r.status, r.error = "aborted", f"not configured: {bad} could not be opened (all or nothing)"
+            return results
+        members = [transaction.Member(c, t.serial, r) for c, t, r in zip(clients, targets, results)]
+        return transaction.configure_rig(members, plan)
+    finally:
+        for c in clients:
+            if c is not None:
+                c.close()
 
 
 def cmd_config(args) -> int:
@@ -166,15 +215,22 @@ def cmd_config(args) -> int:
     if not args.quiet:
         for w in warnings:
             print(f"platform_tools: warning: {w}", file=sys.stderr)
-    results = ops.per_camera(_targets(args, rig), lambda t: _configure_one(t, args, plan))
+    results = _configure_rig(_targets(args, rig), args, plan)
     doc = syncsetup.summary(plan, results, warnings)
     if args.json:
         print_json(doc)
     elif not args.quiet:
         _print_config(doc)
+    if not args.quiet:
+        for r in results:
+            for w in r.warnings:
+                if w.startswith("RAM and flash differ"):
+                    print(f"platform_tools: warning: {r.label}: {w}", file=sys.stderr)
     for r in results:
         if not r.ok:
             error(r.error_line())
+    if any(r.port_problem for r in results):
+        return 2
     return 0 if doc["ok"] else 1
 
 
@@ -192,7 +248,7 @@ def _print_config(doc: dict) -> None:
             print(f"      frames at {cam['frame_rate_hz']:.1f} Hz")
         for w in cam["warnings"]:
             print(f"      warning: {w}")
-        if cam["status"] in ("reverted", "failed"):
+        if cam["status"] in ("reverted", "failed", "aborted"):
             print(f"      now: " + ", ".join(f"{k} {v}" for k, v in cam["after"].items()))
 
 
@@ -209,7 +265,7 @@ def cmd_info(args) -> int:
     elif not args.quiet:
         table = [INFO_COLUMNS] + [[str(r.get(c, "-")) for c in INFO_COLUMNS] for r in rows if "serial" in r]
         widths = [max(len(row[i]) for row in table) for i in range(len(INFO_COLUMNS))]
-        for row in table:
+        for row in table if len(table) > 1 else []:     # no header over an empty table
             print("  ".join(v.ljust(w) for v, w in zip(row, widths)).rstrip())
     return _report_errors(rows)
 
@@ -232,6 +288,9 @@ def cmd_restore(args) -> int:
     if not args.yes:
         raise UserError("boson-restore-defaults discards the cameras' current settings: add --yes to do it")
     rows = _on_each(args, rig_from_args(args), lambda t, c: ops.restore_defaults(c, args.persist))
+    if not args.persist and not args.quiet:
+        print("platform_tools: warning: flash not written: after a power cycle the cameras come back with the "
+              "settings saved before (add --persist to save the factory settings)", file=sys.stderr)
     if args.json:
         print_json({"cameras": rows})
     elif not args.quiet:
@@ -263,6 +322,9 @@ def _parse_raw(args) -> tuple[int, bytes]:
 
 def cmd_raw(args) -> int:
     fid, payload = _parse_raw(args)
+    if fid in C.FLASH_OR_REBOOT and not args.yes:
+        raise UserError(f"0x{fid:08X} ({C.BY_ID[fid].name}) writes or erases the camera's flash or reboots it: "
+                        "add --yes to send it")
     targets = _targets(args, rig_from_args(args))
     if len(targets) != 1:
         raise UserError(f"boson-raw talks to one camera; {len(targets)} match: choose with --camera or --port")
@@ -273,6 +335,8 @@ def cmd_raw(args) -> int:
         print_json(doc)
     elif not args.quiet and "error" not in doc:
         print(doc["reply"] + (f"  ({doc['command']} = {doc['value']})" if "value" in doc else ""))
+    if doc.get("port_problem"):
+        raise UserError(ops.error_line(doc))
     if "error" in doc:
-        raise CheckFailed(f"{target.label}: {doc['error']}")
+        raise CheckFailed(ops.error_line(doc))
     return 0

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from platform_tools.boson import discovery
 from platform_tools.boson.emulator import Trigger, parse_faults
+from platform_tools.boson.emulator.faults import KINDS
 from platform_tools.boson.emulator.fleet import Fleet
 from platform_tools.rig import atomic
 from platform_tools.rig.conventions import UserError, add_output_options, add_rig_options, print_json, rig_from_args
@@ -27,8 +28,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "by-id link usb-FLIR_Boson_<SN>-if00 for each, and print one line per "
                                    "camera: serial, pty, link. Runs until interrupted (SIGUSR1 starts the "
                                    "simulated trigger, SIGUSR2 stops it), for --duration, or while --run runs.",
-                       epilog="Faults: KIND[:p=P][:n=N][:fid=0xID][:times=K], comma-separated; kinds: drop, "
-                              "split, badcrc, wrongseq, garbage, stall, busy, notready, reboot.")
+                       epilog="Faults: KIND[:p=P][:n=N][:fid=0xID][:times=K], comma-separated; kinds: "
+                              + ", ".join(KINDS) + ". Exit codes: 0 served until stopped; with --run, the exit "
+                              "code of the command run; 2 bad input (--serial, --faults, --boot-seconds, the rig).")
     p.add_argument("--serial", type=int, action="append", metavar="N",
                    help="camera serial number (repeat for several cameras; default: the serials set in "
                         "sensors.thermal.left.serial / .right.serial)")

@@ -34,8 +34,10 @@ def test_slave_on_both_cameras_then_idempotent(cli, pair):
         assert cam["status"] == "configured"
         # slave mode, and the telemetry rows the FFC status is read from (the rig records them)
         assert cam["changes"] == [{"setting": "ext_sync_mode", "from": "disable", "to": "slave"},
+                                  {"setting": "telemetry_location", "from": "top", "to": "bottom"},
                                   {"setting": "telemetry_state", "from": "disabled", "to": "enabled"}]
-        assert cam["after"] == {"ext_sync_mode": "slave", "telemetry_state": "enabled"}
+        assert cam["after"] == {"ext_sync_mode": "slave", "telemetry_location": "bottom",
+                                "telemetry_packing": "default", "telemetry_state": "enabled"}
     assert sets(left) == sets(right) == SLAVE
     for emu in (left, right):   # rows placed where platform_tools.boson.telemetry reads them, before switching on
         assert emu.state.settings["telemetry_location"] == C.TelemetryLocation.BOTTOM
@@ -44,7 +46,9 @@ def test_slave_on_both_cameras_then_idempotent(cli, pair):
     requests = left.requests
     code, doc, _ = config(cli, "--slave")
     assert code == 0 and all(c["status"] == "unchanged" and c["changes"] == [] for c in doc["cameras"])
-    assert left.requests - requests == 3           # read serial, sync mode and telemetry: nothing written
+    # identity, serial, then sync mode, telemetry location, packing and state (that read is the final state)
+    assert left.requests - requests == 1 + 1 + 4
+    assert all(c["flash"] is None for c in doc["cameras"])        # slave, not persisted: flash not read
 
 
 def test_telemetry_left_alone_when_the_rig_records_none(cli, pair):
@@ -77,9 +81,18 @@ def test_persist_warns_writes_flash_and_survives_reboot(cli, pair):
     code, doc, err = config(cli, "--slave", "--persist", "--reboot-verify")
     assert code == 0, err
     assert "no video" in err and doc["warnings"]
-    for emu in pair:
-        assert emu.state.flash["ext_sync_mode"] == SLAVE and emu.state.boots == 2
-    assert all(c["persisted"] and "rebooted" in c["steps"] for c in doc["cameras"])
+    for emu in pair:   # one reboot to read the flash, one to verify it
+        assert emu.state.flash["ext_sync_mode"] == SLAVE and emu.state.boots == 3 and emu.state.flash_writes == 1
+    assert all(c["persisted"] and "rebooted" in c["steps"] and "rebooted to read flash" in c["steps"]
+               for c in doc["cameras"])
+    assert all(c["flash_before"]["ext_sync_mode"] == "disable" and c["flash"]["ext_sync_mode"] == "slave"
+               for c in doc["cameras"])
+    # flash only when needed: a second run finds flash holding the wanted settings and writes nothing
+    code, doc, err = config(cli, "--slave", "--persist")
+    assert code == 0, err
+    assert all(c["status"] == "unchanged" and "flash already holds the wanted settings: not written" in c["steps"]
+               for c in doc["cameras"])
+    assert all(emu.state.flash_writes == 1 for emu in pair)
 
 
 def test_soft_flash_error_is_a_warning_when_read_back_is_right(cli, make_boson):
@@ -117,16 +130,27 @@ def test_check_trigger_failure_after_persist_is_never_written(cli, pair):
         assert emu.state.flash_writes == 0 and emu.state.flash["ext_sync_mode"] == DISABLE
 
 
-def test_one_dead_camera_does_not_stop_the_other(cli, pair):
+def test_one_dead_camera_leaves_the_other_untouched(cli, pair):
     left, right = pair
     right.faults = parse_faults("stall")
     code, doc, err = config(cli, "--slave")
     assert code == 1
     cams = by_label(doc)
-    assert cams["left"]["status"] == "configured" and sets(left) == SLAVE
+    assert cams["left"]["status"] == "aborted" and "right failed at the read step" in cams["left"]["error"]
     assert cams["right"]["status"] == "error" and "no reply" in cams["right"]["error"]
-    assert sets(right) == DISABLE
+    assert sets(left) == DISABLE and sets(right) == DISABLE
     assert "error: right: no reply" in err
+
+
+def test_a_camera_failing_at_the_read_step_aborts_the_other(cli, pair):
+    left, right = pair
+    right.faults = parse_faults(f"stall:fid=0x{C.GET_EXT_SYNC.function_id:08X}")
+    code, doc, err = config(cli, "--slave")
+    assert code == 1
+    cams = by_label(doc)
+    assert cams["left"]["status"] == "aborted" and "right failed at the read step" in cams["left"]["error"]
+    assert cams["right"]["status"] == "error" and "no reply" in cams["right"]["error"]
+    assert sets(left) == DISABLE and sets(right) == DISABLE
 
 
 def test_failure_mid_apply_reverts_the_camera(cli, pair):
@@ -136,11 +160,12 @@ def test_failure_mid_apply_reverts_the_camera(cli, pair):
     code, doc, _ = config(cli, "--slave", "--display-mode", "one-shot")
     assert code == 1
     cams = by_label(doc)
-    assert cams["left"]["status"] == "configured"
+    assert cams["left"]["status"] == "reverted" and "right failed at the apply step" in cams["left"]["error"]
     assert cams["right"]["status"] == "reverted" and "CamBusy" in cams["right"]["error"]
     assert "set ext_sync_mode slave" in cams["right"]["steps"] and "reverted" in cams["right"]["steps"]
-    assert sets(right) == DISABLE and right.state.settings["display_mode"] == 0
-    assert sets(left) == SLAVE and left.state.settings["display_mode"] == 1
+    for emu in pair:                                   # both back to what they had
+        assert sets(emu) == DISABLE and emu.state.settings["display_mode"] == 0
+        assert emu.state.settings["telemetry_state"] == 0 and emu.state.settings["telemetry_location"] == 0
 
 
 def test_reboot_in_the_middle_of_the_set_command(cli, pair):
@@ -154,8 +179,9 @@ def test_reboot_in_the_middle_of_the_set_command(cli, pair):
 def test_reboot_after_apply_loses_ram_and_is_reapplied(cli, pair):
     left, _ = pair
     # reboot while reading back: RAM reloads from flash (DISABLE); the tool notices and applies again.
-    # Request 7 is the read-back: serial, sync mode, telemetry, set sync, telemetry location, set telemetry.
-    left.faults = parse_faults(f"reboot:fid=0x{C.GET_EXT_SYNC.function_id:08X}:n=7")
+    # Request 10 is the read-back: identity, serial, 4 reads, set sync, telemetry location, telemetry state
+    # (packing is already the default) = 9 requests, then the first read-back.
+    left.faults = parse_faults(f"reboot:fid=0x{C.GET_EXT_SYNC.function_id:08X}:n=10")
     code, doc, err = config(cli, "--slave")
     assert code == 0, err
     cam = by_label(doc)["left"]
@@ -187,7 +213,7 @@ def test_rig_camera_missing_is_refused_before_touching_the_other(cli, make_boson
     left = make_boson(LEFT)
     code, _, err = cli("boson-config", "--slave", *RIG_SERIALS, *FAST)
     assert code == 2 and f"right camera (SN {RIGHT}) not found" in err and f"SN {LEFT}" in err
-    assert sets(left) == DISABLE and left.requests == 0
+    assert sets(left) == DISABLE and left.requests == 1      # asked its serial number, nothing else
 
 
 def test_no_camera(cli, by_id):
@@ -203,7 +229,7 @@ def test_identity_mismatch_on_an_explicit_port(cli, make_boson):
 
 def test_port_that_does_not_exist(cli, tmp_path):
     code, doc, err = config(cli, "--slave", "--port", str(tmp_path / "ttyACM9"))
-    assert code == 1 and "no such port" in err
+    assert code == 2 and "no such port" in err and doc["cameras"][0]["port_problem"]
 
 
 def test_bad_options(cli, pair):

@@ -95,6 +95,7 @@ def test_raw_needs_one_camera(cli, pair):
 def test_help(cmd):
     r = subprocess.run(PT + [cmd, "--help"], cwd=REPO, capture_output=True, text=True)
     assert r.returncode == 0 and "usage:" in r.stdout
+    assert "Exit codes: 0" in r.stdout and " 2 bad input" in r.stdout
 
 
 def _start_emulator(tmp_path, *extra):
@@ -139,7 +140,7 @@ def test_permission_denied_on_the_port(tmp_path):
                            capture_output=True, text=True, user=65534, group=65534, extra_groups=[])
         if "No module named" in r.stderr or "can't open file" in r.stderr or "Errno 13" in r.stderr:
             pytest.skip(f"the unprivileged user cannot run the tool here: {r.stderr.strip()[-200:]}")
-        assert r.returncode == 1 and "permission denied" in r.stderr and "dialout" in r.stderr
+        assert r.returncode == 2 and "permission denied" in r.stderr and "dialout" in r.stderr
         assert len(r.stderr.strip().splitlines()) == 1 and r.stderr.count(pty) == 1
         assert "Traceback" not in r.stderr
     finally:
@@ -165,3 +166,43 @@ def test_emulator_session_writes_result_and_log(tmp_path):
 def test_emulator_bad_faults(cli):
     code, _, err = cli("boson-emulator", "--faults", "explode")
     assert code == 2 and "unknown fault" in err
+
+
+@pytest.mark.parametrize("fid", sorted(C.FLASH_OR_REBOOT))
+def test_raw_refuses_flash_and_reboot_without_yes(cli, make_boson, fid):
+    emu = make_boson(LEFT)
+    code, out, err = cli("boson-raw", f"0x{fid:08X}", *FAST)
+    assert code == 2 and out == "" and "--yes" in err and C.BY_ID[fid].name in err
+    assert emu.requests == 0 and emu.state.flash_writes == 0 and emu.state.boots == 1
+
+
+def test_raw_sends_a_flash_write_with_yes(cli, make_boson):
+    emu = make_boson(LEFT)
+    code, out, err = cli("boson-raw", f"0x{C.WRITE_FLASH.function_id:08X}", "--yes", *FAST, "--json")
+    assert code == 0, err
+    assert emu.state.flash_writes == 1 and json.loads(out)["status"] == "0x000"
+
+
+def test_raw_camera_error_names_the_camera_once(cli, make_boson):
+    make_boson(LEFT)
+    code, _, err = cli("boson-raw", "0x00050098", "00000009", "--camera", str(LEFT), *FAST)
+    assert code == 1 and err.count(f"SN {LEFT}") == 1 and "RangeError" in err
+
+
+def test_a_port_that_does_not_exist_is_bad_input(cli, tmp_path):
+    for argv in (("boson-info",), ("boson-raw", "0x00050002"), ("boson-config", "--slave")):
+        code, _, err = cli(*argv, "--port", str(tmp_path / "ttyACM9"), *FAST)
+        assert code == 2 and "no such port" in err, argv
+
+
+def test_info_prints_no_empty_table_when_every_camera_fails(cli, pair):
+    for emu in pair:
+        emu.faults = parse_faults("stall")
+    code, out, err = cli("boson-info", *FAST)
+    assert code == 1 and out == "" and err.count("no reply") == 2
+
+
+def test_restore_without_persist_warns_that_flash_keeps_the_old_settings(cli, make_boson):
+    emu = make_boson(LEFT)
+    code, _, err = cli("boson-restore-defaults", "--yes", *FAST)
+    assert code == 0 and "flash not written" in err and emu.state.flash_writes == 0

@@ -141,3 +141,16 @@ def test_port_that_never_comes_back(boson):
     client.timeouts = Timeouts(first_s=0.15, rest_s=0.3, slow_s=0.5, reopen_s=0.4)
     with pytest.raises(codes.PortGone, match="did not come back"):
         client.call(C.GET_CAMERA_SN)
+
+
+@pytest.mark.slow
+def test_a_slow_camera_costs_its_latency_not_a_timeout_per_command(boson):
+    emu, client = boson
+    emu.faults = parse_faults("delay:s=0.4")        # every reply 0.4 s late; the first-byte timeout is 0.15 s
+    for _ in range(6):
+        assert client.call(C.GET_CAMERA_SN) == 93588
+    # a timeout per command (the reply always later than the timeout, the late one dropped) would give at
+    # least one retry per call; here the first calls time out while the client learns the latency (and the
+    # camera works through the extra requests queued behind), then the rest wait long enough
+    assert client.stats.retries <= 3 and client.latency_s > 0.15
+    assert emu.requests <= 6 + 3

@@ -127,3 +127,16 @@ def test_stream_decoder_recovers_after_noise(noise, frame):
     dec.feed(noise)
     out = dec.feed(fslp.encode(frame))
     assert out[-1] == frame
+
+
+def test_encoder_and_decoder_share_one_body_limit():
+    CRC_SIZE, HEADER_SIZE, MAX_BODY = fslp.CRC_SIZE, fslp.HEADER_SIZE, fslp.MAX_BODY
+    longest = fslp.Frame(0, 1, 2, 0, bytes(MAX_BODY - HEADER_SIZE - CRC_SIZE))
+    assert fslp.decode(fslp.encode(longest)) == longest
+    with pytest.raises(ValueError):
+        fslp.encode(fslp.Frame(0, 1, 2, 0, bytes(MAX_BODY - HEADER_SIZE - CRC_SIZE + 1)))
+    body = bytes(MAX_BODY - CRC_SIZE + 1)           # one byte over, hand-built with a valid CRC
+    raw = bytes([0x8E]) + fslp.escape(body + fslp.crc16(body).to_bytes(2, "big")) + bytes([0xAE])
+    with pytest.raises(fslp.FramingError, match="limit"):
+        fslp.decode(raw)
+    assert isinstance(fslp.StreamDecoder().feed(raw)[0], fslp.FramingError)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from platform_tools.boson import codes, fslp, operations as ops, syncsetup
+from platform_tools.boson import codes, fslp, operations as ops, syncsetup, transaction
 from platform_tools.boson import commands as C
 from platform_tools.boson.client import BosonClient, Timeouts
 from platform_tools.boson.emulator import BosonState, answer_with
@@ -110,20 +110,24 @@ def test_camera_info_reads_the_table_and_checks_the_serial():
     assert ops.camera_info(client, 11111, ("serial",))["error"] == "answers as SN 93588, not SN 11111"
 
 
+def configure_one(client, serial, plan, path):
+    return transaction.configure_rig([transaction.Member(client, serial, syncsetup.CameraResult("left", path))],
+                                     plan)[0]
+
+
 def test_sync_setup_on_bytes_configures_then_finds_nothing_to_do(rig):
     plan = syncsetup.plan_for(rig, mode="slave", persist=False)
     client, port, state = camera()
-    first = syncsetup.configure(client, 93588, plan, syncsetup.CameraResult("left", port.path))
+    first = configure_one(client, 93588, plan, port.path)
     assert first.status == "configured" and state.settings["ext_sync_mode"] == int(C.ExtSyncMode.SLAVE)
     assert [c["setting"] for c in first.changes][0] == "ext_sync_mode"
-    again = syncsetup.configure(client, 93588, plan, syncsetup.CameraResult("left", port.path))
+    again = configure_one(client, 93588, plan, port.path)
     assert again.status == "unchanged" and again.changes == []
 
 
 def test_sync_setup_refuses_a_camera_with_another_serial(rig):
     client, port, state = camera(11111)
-    result = syncsetup.configure(client, 93588, syncsetup.plan_for(rig, mode="slave", persist=False),
-                                 syncsetup.CameraResult("left", port.path))
+    result = configure_one(client, 93588, syncsetup.plan_for(rig, mode="slave", persist=False), port.path)
     assert result.status == "error" and "SN 11111" in result.error
     assert state.settings["ext_sync_mode"] == int(C.ExtSyncMode.DISABLE)      # nothing written
 
@@ -149,3 +153,36 @@ def test_a_plan_that_cannot_be_done_is_one_line(rig):
     with pytest.raises(ValueError, match="use it with --persist"):
         syncsetup.plan_for(rig, persist=False, reboot_verify=True)
     assert syncsetup.plan_for(rig, mode="slave", check_trigger_s=0.5).check_trigger.rate_hz == rig.desc.sync.rate_hz
+
+
+def test_noise_holding_the_start_byte_before_the_reply_is_skipped_without_a_retry():
+    noise = bytes([0x01, fslp.START, 0x02, 0x03, fslp.START, 0x55])      # two false starts
+    client, _ = client_for(scripted(lambda req: [noise + fslp.encode(fslp.reply(req, 0, SN))]))
+    assert client.call(C.GET_CAMERA_SN) == 93588
+    assert client.stats.retries == 0 and client.stats.bad_frames == 2
+
+
+def test_noise_in_its_own_chunk_before_the_reply_is_skipped_too():
+    noise = bytes([0x10, fslp.START, 0x20])
+    client, _ = client_for(scripted(lambda req: [noise, fslp.encode(fslp.reply(req, 0, SN))]))
+    assert client.call(C.GET_CAMERA_SN) == 93588 and client.stats.retries == 0
+
+
+def test_error_replies_carry_the_payload_size_the_sdk_reads():
+    from platform_tools.boson.emulator.state import error_payload
+    s = BosonState(93588)
+    respond = answer_with(s)
+    (raw,) = respond(fslp.request(1, C.GET_EXT_SYNC.function_id, b"\0"))     # excess bytes: an error
+    frame = fslp.decode(raw)
+    assert frame.status == 0x17E and frame.payload == bytes(4) == error_payload(C.GET_EXT_SYNC.function_id)
+    assert error_payload(C.SET_EXT_SYNC.function_id) == b""
+
+
+def test_every_setter_has_a_getter_that_reads_back_what_it_set():
+    client, _, state = camera()
+    setters = [c for c in C.BY_NAME.values() if c.request and "Set" in c.name]
+    for setter in setters:
+        getter = C.BY_NAME[setter.name.replace("Set", "Get", 1)]
+        value = 1
+        client.call(setter, value)
+        assert int(client.call(getter)) == value, setter.name

@@ -81,7 +81,7 @@ def bosons(tmp_path, monkeypatch):
     emus = {}
     for side, sn in (("left", 93588), ("right", 93589)):
         # as boson-config leaves them: slave mode, telemetry rows on
-        state = BosonState(sn, trigger=trigger, settings=dict(FACTORY, ext_sync_mode=2, telemetry_state=1))
+        state = BosonState(sn, trigger=trigger, settings=dict(FACTORY, ext_sync_mode=2, telemetry_state=1, telemetry_location=1))
         emus[side] = EmulatedBoson(state, by_id_dir=by_id, boot_s=0.05, seed=sn).start()
     yield emus, trigger
     for e in emus.values():

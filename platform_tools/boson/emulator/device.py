@@ -20,7 +20,7 @@ from typing import Callable, TextIO
 from .. import commands as C
 from .. import fslp
 from .faults import FaultRule
-from .state import BosonState
+from .state import BosonState, error_payload
 
 BUSY, NOT_READY = 0x283, 0x202
 
@@ -176,15 +176,23 @@ class EmulatedBoson:
         if "reboot" in fired:
             self.reboot()
             return
+        if "delay" in fired:
+            delay = max((r.s if r.s is not None else 1.5) for r in self.faults if r.kind == "delay")
+            if self._stop.wait(delay):
+                return
         if "stall" in fired:
             return
         if "busy" in fired:
             outcome_status, payload, reboot = BUSY, b"", False
         elif "notready" in fired:
             outcome_status, payload, reboot = NOT_READY, b"", False
+        elif "ignore" in fired:
+            outcome_status, payload, reboot = 0, error_payload(req.function_id), False
         else:
             out = self.state.handle(req.function_id, req.payload)
             outcome_status, payload, reboot = out.status, out.payload, out.reboot
+        if outcome_status != 0:
+            payload = error_payload(req.function_id)
         rep = fslp.reply(req, outcome_status, payload)
         raw = fslp.encode(rep)
         if "badcrc" in fired:

@@ -14,13 +14,15 @@ rule applies to every request. Kinds:
 - ``busy``      answer FLR_CAM_BUSY (0x283) without executing
 - ``notready``  answer FLR_NOT_READY (0x202) without executing
 - ``reboot``    reboot in the middle of the command: no reply, the command is lost, the port vanishes
+- ``ignore``    answer success without executing (a setting that does not stick: only a read-back sees it)
+- ``delay``     answer ``s`` seconds late (default 1.5; a slow camera: it serves nothing else meanwhile)
 """
 from __future__ import annotations
 
 import random
 from dataclasses import dataclass
 
-KINDS = ("drop", "split", "badcrc", "wrongseq", "garbage", "stall", "busy", "notready", "reboot")
+KINDS = ("drop", "split", "badcrc", "wrongseq", "garbage", "stall", "busy", "notready", "reboot", "ignore", "delay")
 
 
 @dataclass
@@ -30,6 +32,7 @@ class FaultRule:
     n: int | None = None
     fid: int | None = None
     times: int | None = None     # remaining applications (None = unlimited)
+    s: float | None = None       # seconds, for delay
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -40,6 +43,8 @@ class FaultRule:
             raise ValueError(f"fault {self.kind}: n counts requests from 1")
         if self.times is not None and self.times < 0:
             raise ValueError(f"fault {self.kind}: times must be >= 0")
+        if self.s is not None and not 0.0 <= self.s <= 60.0:
+            raise ValueError(f"fault {self.kind}: s={self.s} is not a delay in seconds in [0, 60]")
 
     def fires(self, request_index: int, function_id: int, rng: random.Random) -> bool:
         """Whether this rule applies to this request; consumes one of ``times`` if it does."""
@@ -57,7 +62,8 @@ class FaultRule:
 
     def spec(self) -> str:
         parts = [self.kind] + [f"{k}={v if k != 'fid' else f'0x{v:08X}'}" for k, v in
-                               (("p", self.p), ("n", self.n), ("fid", self.fid), ("times", self.times))
+                               (("p", self.p), ("n", self.n), ("fid", self.fid), ("times", self.times),
+                                ("s", self.s))
                                if v is not None]
         return ":".join(parts)
 
@@ -70,14 +76,14 @@ def parse_rule(text: str) -> FaultRule:
         if not sep:
             raise ValueError(f"fault {text!r}: selector {sel!r} is not KEY=VALUE")
         try:
-            if key == "p":
-                kw["p"] = float(value)
+            if key in ("p", "s"):
+                kw[key] = float(value)
             elif key in ("n", "times"):
                 kw[key] = int(value)
             elif key == "fid":
                 kw["fid"] = int(value, 0)
             else:
-                raise ValueError(f"fault {text!r}: unknown selector {key!r} (p, n, fid, times)")
+                raise ValueError(f"fault {text!r}: unknown selector {key!r} (p, n, fid, times, s)")
         except ValueError as exc:
             if "selector" in str(exc):
                 raise

@@ -7,6 +7,7 @@ pulses of the trigger it is wired to.
 """
 from __future__ import annotations
 
+import struct
 import threading
 import time
 from dataclasses import dataclass, field
@@ -50,6 +51,10 @@ _GETTERS = {
     "bosonGetFFCMode": "ffc_mode",
     "bosonGetGainMode": "gain_mode",
     "telemetryGetState": "telemetry_state",
+    "telemetryGetLocation": "telemetry_location",
+    "telemetryGetPacking": "telemetry_packing",
+    "dvoGetOutputFormat": "dvo_output_format",
+    "colorLutGetId": "color_lut",
     "sysctrlGetUsbVideoIR16Mode": "ir16_mode",
     "dvoGetDisplayMode": "display_mode",
     "agcGetMode": "agc_mode",
@@ -180,6 +185,16 @@ class BosonState:
         return Outcome(BAD_COMMAND_ID)     # in the table but not emulated
 
 
+def error_payload(function_id: int) -> bytes:
+    """The payload of an error reply: zero bytes of the command's normal reply size. FLIR's SDK for
+    Python reads a getter's reply payload before it looks at the status, so a reply without those bytes
+    makes it raise "Did not receive expected number of bytes" instead of returning the error code
+    (seen against this emulator, issue 17). What a real camera sends with an error is NOT known here:
+    the zeros are an assumption that keeps the SDK's error path working."""
+    cmd = C.BY_ID.get(function_id)
+    return bytes(struct.calcsize(cmd.reply)) if cmd is not None and cmd.reply else b""
+
+
 def answer_with(state: BosonState) -> Callable[[bytes], list[bytes]]:
     """A loopback responder (platform_tools.boson.loopback): request bytes in, the encoded replies of
     ``state`` out, one chunk per reply (no faults, no reboot: the pty device adds those)."""
@@ -191,7 +206,8 @@ def answer_with(state: BosonState) -> Callable[[bytes], list[bytes]]:
             if isinstance(item, fslp.FslpError) or item.channel != fslp.CHANNEL_COMMAND or not item.is_request:
                 continue
             outcome = state.handle(item.function_id, item.payload)
-            out.append(fslp.encode(fslp.reply(item, outcome.status, outcome.payload)))
+            payload = outcome.payload if outcome.status == 0 else error_payload(item.function_id)
+            out.append(fslp.encode(fslp.reply(item, outcome.status, payload)))
         return out
 
     return respond

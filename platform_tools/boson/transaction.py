@@ -1,0 +1,246 @@
+"""The set-up of external sync as one transaction over the whole rig: every camera ends configured, or
+every camera touched is put back to what was read at the start, in RAM and in flash.
+
+Phases, each on every camera at once; a phase starts only when the previous one succeeded on every
+camera:
+
+1. **read**: the camera's serial number (identity), its RAM settings, and with ``plan.read_flash`` its
+   flash (a reboot reloads RAM from flash, then read);
+2. **apply and verify** what differs in RAM; read back (a camera that re-enumerated meanwhile came
+   back with its flash settings: applied again);
+3. **trigger check** (``plan.check_trigger``);
+4. **persist** (``plan.persist``), only now that every camera verified: the flash write is skipped where
+   flash is known to hold the wanted settings already; then ``plan.reboot_verify``.
+
+If any step fails on any camera, every camera whose RAM or flash this run changed is reverted: flash
+first (the settings it held at the start, when read, else the RAM read at the start), then RAM, each
+verified by reading back. A camera not touched yet is ``aborted``. Every camera's final RAM is read
+back into ``after``; ``flash`` is what its flash holds as far as the run knows, and a warning says when
+RAM and flash differ (the camera comes back otherwise after a power cycle).
+
+Two cameras cannot be written atomically: a power cut during phase 4 can leave one camera's flash new
+and the other's old. The next run with ``read_flash`` sees it (the RAM/flash warning) and rewrites only
+the camera that needs it; docs/boson.md says so.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from . import commands as C
+from .client import BosonClient
+from .codes import BosonError, IdentityMismatch
+from .operations import per_camera
+from .syncsetup import (CameraResult, Plan, StepFailed, apply, check_trigger, diff, read_flash, read_settings,
+                        verify, write_flash)
+
+log = logging.getLogger(__name__)
+
+#: how many times a step is re-done after the camera re-enumerated in the middle of it
+REENUMERATION_RETRIES = 2
+
+
+@dataclass
+class Member:
+    """One camera in the transaction."""
+    client: BosonClient
+    target_serial: int | None
+    result: CameraResult
+    ram: dict[str, Any] | None = None     # what RAM holds now, as far as this run knows
+    touched: bool = False                 # this run changed RAM (a revert is owed)
+    reopens_seen: int = 0                 # client.reopens when RAM was last verified
+
+
+# ---------------------------------------------------------------------------- steps on one camera
+def _set_ram(m: Member, wanted: dict[str, Any], what: str) -> None:
+    """RAM to ``wanted`` (only what differs), verified; re-applied if the camera re-enumerated."""
+    keys = [k for k in m.result.before if k in wanted] or list(wanted)
+    current = m.ram if m.ram is not None else read_settings(m.client, keys)
+    for attempt in range(REENUMERATION_RETRIES + 1):
+        reopens = m.client.reopens
+        changes = diff(current, wanted)
+        if not changes and m.ram is not None and m.client.reopens == m.reopens_seen:
+            return                               # as last read, nothing to write, no re-enumeration since
+        if changes:
+            m.touched = True
+            apply(m.client, changes, m.result)
+        try:
+            m.ram = verify(m.client, wanted, what)
+            m.reopens_seen = m.client.reopens
+            return
+        except StepFailed:
+            if m.client.reopens == reopens or attempt == REENUMERATION_RETRIES:
+                raise
+            m.result.warnings.append(f"the camera re-enumerated during {what}; settings applied again")
+            current = read_settings(m.client, keys)
+
+
+def _still_set(m: Member, wanted: dict[str, Any], what: str) -> bool:
+    """After a step: if the camera re-enumerated since RAM was verified, apply and verify again.
+    True when it had re-enumerated."""
+    if m.client.reopens == m.reopens_seen:
+        return False
+    m.result.warnings.append(f"the camera re-enumerated during {what}; settings applied again")
+    m.ram = None
+    _set_ram(m, wanted, f"re-applying after {what}")
+    return True
+
+
+def _read(m: Member, plan: Plan) -> None:
+    sn = m.client.call(C.GET_CAMERA_SN)
+    m.result.serial = sn
+    if m.target_serial is not None and sn != m.target_serial:
+        raise IdentityMismatch(f"{m.result.port} answers as SN {sn}, not SN {m.target_serial} as the rig says")
+    m.result.before = read_settings(m.client, plan.keys)
+    m.ram = dict(m.result.before)
+    if plan.read_flash and not plan.dry_run:
+        m.result.flash_before = read_flash(m.client, plan.keys, m.result)
+        m.ram = dict(m.result.flash_before)
+        m.touched = m.ram != m.result.before       # RAM now holds the flash's settings
+    m.reopens_seen = m.client.reopens
+    m.result.changes = [{"setting": k, "from": C.enum_name(a), "to": C.enum_name(b)}
+                        for k, a, b in diff(m.result.before, plan.desired)]
+
+
+def _check_trigger(m: Member, plan: Plan) -> None:
+    for attempt in range(REENUMERATION_RETRIES + 1):
+        try:
+            check_trigger(m.client, plan.check_trigger, m.result)
+        except StepFailed:
+            # a camera that re-enumerated while counting came back free running (its flash): count again
+            if not _still_set(m, plan.desired, "the trigger check") or attempt == REENUMERATION_RETRIES:
+                raise
+            continue
+        if not _still_set(m, plan.desired, "the trigger check"):
+            return
+    raise StepFailed("trigger check: the camera kept re-enumerating")
+
+
+def _persist(m: Member, plan: Plan) -> None:
+    if m.result.flash_before is not None and not diff(m.result.flash_before, plan.desired):
+        m.result.steps.append("flash already holds the wanted settings: not written")
+        m.result.flash = dict(m.result.flash_before)
+        return
+    for _ in range(REENUMERATION_RETRIES + 1):
+        write_flash(m.client, m.result)
+        # a camera that re-enumerated during the write wrote (if anything) its old RAM: set and write again
+        if not _still_set(m, plan.desired, "the flash write"):
+            break
+    else:
+        raise StepFailed("flash write: the camera kept re-enumerating")
+    m.ram = verify(m.client, plan.desired, "after the flash write")
+    m.result.persisted = True
+    m.result.flash = dict(plan.desired)
+    if plan.reboot_verify:
+        m.client.reboot()
+        m.result.steps.append("rebooted")
+        m.ram = verify(m.client, plan.desired, "after a reboot (the flash did not keep the settings)")
+        m.reopens_seen = m.client.reopens
+
+
+def _revert(m: Member) -> None:
+    """Flash, then RAM, back to what was read at the start; verified. Sets the final status."""
+    r = m.result
+    if not m.touched and not r.flash_written:
+        r.status = "aborted"
+        return
+    try:
+        if r.flash_written:
+            old = r.flash_before if r.flash_before is not None else r.before
+            if r.flash_before is None:
+                r.warnings.append("what flash held before this run was not read (--read-flash): it now holds "
+                                  "the settings read from RAM at the start")
+            m.ram = None
+            _set_ram(m, old, "restoring flash")
+            for _ in range(REENUMERATION_RETRIES + 1):
+                write_flash(m.client, r)
+                if not _still_set(m, old, "the flash restore"):
+                    break
+            r.steps.append("wrote the previous settings to flash")
+            r.persisted, r.flash = False, dict(old)
+        m.ram = None
+        _set_ram(m, r.before, "revert")
+        r.status = "reverted"
+        r.steps.append("reverted")
+    except BosonError as exc:
+        r.status = "failed"
+        r.error = f"{r.error}; and the revert failed too: {exc}"
+
+
+def _final_read(m: Member, plan: Plan) -> None:
+    """``after``: the last read-back when nothing happened since (no re-enumeration), else read now."""
+    r = m.result
+    try:
+        fresh = m.ram is not None and m.client.reopens == m.reopens_seen and set(m.ram) == set(plan.keys)
+        r.after = dict(m.ram) if fresh else read_settings(m.client, plan.keys)
+    except BosonError as exc:
+        r.after = {k: "unknown" for k in plan.keys}
+        r.warnings.append(f"final read-back failed: {exc}")
+        return
+    if r.flash is None and r.flash_before is not None and not r.flash_written:
+        r.flash = dict(r.flash_before)
+    if r.flash is not None:
+        differ = [f"{k} {C.enum_name(r.flash[k])} in flash, {C.enum_name(v)} now" for k, v in r.after.items()
+                  if k in r.flash and r.flash[k] != v]
+        if differ:
+            r.warnings.append("RAM and flash differ (after a power cycle the camera comes back with its flash "
+                              "settings): " + "; ".join(differ) + "; use --persist to save the current ones")
+
+
+# ---------------------------------------------------------------------------- the whole rig
+def _phase(members: list[Member], step: Callable[[Member], None]) -> list[tuple[Member, BosonError]]:
+    """``step`` on every camera at once; the cameras where it raised, with what."""
+    def one(m: Member) -> BosonError | None:
+        try:
+            step(m)
+        except BosonError as exc:
+            return exc
+        return None
+    return [(m, e) for m, e in zip(members, per_camera(members, one)) if e is not None]
+
+
+def _fail(members: list[Member], failed: list[tuple[Member, BosonError]], phase: str, plan: Plan) -> None:
+    culprits = {id(m) for m, _ in failed}
+    for m, exc in failed:
+        m.result.error = str(exc)
+    names = ", ".join(m.result.label for m, _ in failed)
+    for m in members:
+        if id(m) not in culprits:
+            m.result.error = f"not configured: {names} failed at the {phase} step (the rig is set up all or nothing)"
+    for m, exc in failed:
+        if phase == "read" and not m.touched:
+            m.result.status = "error"
+    per_camera([m for m in members if m.result.status != "error"], _revert)
+    per_camera([m for m in members if m.result.status != "error"], lambda m: _final_read(m, plan))
+
+
+def configure_rig(members: list[Member], plan: Plan) -> list[CameraResult]:
+    """Run ``plan`` on every camera as one transaction (see the module's doc); returns the results in
+    the order of ``members``. Never raises for a camera problem: it is in the results."""
+    for m in members:
+        m.result.status = "pending"
+    failed = _phase(members, lambda m: _read(m, plan))
+    if failed:
+        _fail(members, failed, "read", plan)
+        return [m.result for m in members]
+    if plan.dry_run:
+        for m in members:
+            m.result.status = "would-change" if m.result.changes or plan.persist else "unchanged"
+            m.result.after = dict(m.result.before)
+        return [m.result for m in members]
+    steps: list[tuple[str, Callable[[Member], None]]] = [
+        ("apply", lambda m: _set_ram(m, plan.desired, "read-back after applying"))]
+    if plan.check_trigger is not None:
+        steps.append(("trigger check", lambda m: _check_trigger(m, plan)))
+    if plan.persist:
+        steps.append(("persist", lambda m: _persist(m, plan)))
+    for name, step in steps:
+        failed = _phase(members, step)
+        if failed:
+            _fail(members, failed, name, plan)
+            return [m.result for m in members]
+    for m in members:
+        m.result.status = "configured" if m.touched or m.result.persisted else "unchanged"
+    per_camera(members, lambda m: _final_read(m, plan))
+    return [m.result for m in members]
