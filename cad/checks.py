@@ -384,8 +384,19 @@ def check_printable(asm: Assembly, meshes: dict[str, np.ndarray] | None = None) 
                        f"or bridging more than {p.max_bridge_mm:g} mm", details, data)
 
 
+def check_assembly_order(asm: Assembly, steps=None, extra=()) -> CheckResult:
+    """Every screw has a straight driver path at the guide's step that fits it (cad/assembly_order.py)."""
+    from .assembly_order import driver_paths
+    r = driver_paths(asm, steps, extra)
+    blocked = len({p.split(" ")[0] for p in r.problems})
+    return CheckResult("assembly order", not r.problems,
+                       f"{r.screws} screws, each driven at its step clear of every part installed by then"
+                       if not r.problems else f"{blocked} of {r.screws} screws cannot be driven at their step",
+                       r.problems + r.details, r.data)
+
+
 CHECKS = [check_valid, check_interference, check_min_wall, check_clearances, check_bed, check_printable, check_fov,
-          check_battery, check_vents, check_mass, check_estimates]
+          check_battery, check_vents, check_assembly_order, check_mass, check_estimates]
 
 
 def run_checks(asm: Assembly) -> list[CheckResult]:

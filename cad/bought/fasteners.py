@@ -33,10 +33,21 @@ class FastenerTableError(InputProblems):
 
 
 @dataclass(frozen=True)
+class Driver:
+    """The tool that drives a thread's screw, as the envelope it sweeps along the screw's axis: a bit
+    (``bit_diameter_mm`` across, ``bit_length_mm`` out from the head) then its handle (mm)."""
+    bit_diameter_mm: Annotated[float, Gt(0)]
+    bit_length_mm: Annotated[float, Gt(0)]
+    handle_diameter_mm: Annotated[float, Gt(0)]
+    handle_length_mm: Annotated[float, Gt(0)]
+
+
+@dataclass(frozen=True)
 class ThreadSize:
     """One row of the table (mm)."""
     diameter_mm: Annotated[float, Gt(0)]
     screw: str                                   # rig part id of the screw for this thread
+    driver: Driver                               # the tool that turns it (its envelope)
     tap_drill_mm: Optional[Annotated[float, Gt(0)]] = None
     insert: Optional[str] = None                 # rig part id of its heat-set insert
 

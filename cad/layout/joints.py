@@ -127,7 +127,8 @@ class _Joints:
                               direction=direction, grip_mm=grip, kind="insert", host=host, holes=holes + extra,
                               insert=ins))
 
-    def tapped(self, name, screw_id, thread, head, direction, grip, clamped, host, depth, cut_host=None):
+    def tapped(self, name, screw_id, thread, head, direction, grip, clamped, host, depth, cut_host=None,
+               extra: tuple[Hole, ...] = ()):
         length = pick_length(grip, min(self.c.tapped_engagement_min_mm, depth * TAPPED_MIN_ENGAGEMENT), depth)
         hd, dvec = np.asarray(head), np.asarray(direction)
         hole_d = self.fits.screw_hole_mm(thread)
@@ -137,7 +138,7 @@ class _Joints:
             holes += (Hole(cut_host, tuple(hd + grip * dvec - HOLE_LEAD_MM * dvec), direction,
                            fastener_table().size(thread).tap_drill_mm, depth + TAP_DRILL_RUNOUT_MM),)
         self.out.append(Joint(name=name, screw=Screw.from_rig(self.rig, screw_id, thread, length), head=head,
-                              direction=direction, grip_mm=grip, kind="tapped", host=host, holes=holes))
+                              direction=direction, grip_mm=grip, kind="tapped", host=host, holes=holes + extra))
 
 
 def place_joints(rig: Rig, c: Constants, fits: Fits, *, cameras: Cameras, cooling: Cooling, mounts: CameraMounts,
@@ -175,17 +176,21 @@ def place_joints(rig: Rig, c: Constants, fits: Fits, *, cameras: Cameras, coolin
             j.tapped(f"heat_sink_{side}_{k}", e.screw, case_thread, (cb.centre[0], cb.centre[1] + dy, fo), UP,
                      wall + (bar.hi[2] - bar.lo[2]), ["case_lower", "thermal_mount"], f"heat_sink_{side}",
                      c.heat_sink_base_mm - HEAT_SINK_HOLE_FLOOR_MM, cut_host=f"heat_sink_{side}")
-    # ZED mount: two floor screws into its foot; the camera on its 1/4-20 thread
+    # ZED mount: two floor screws into its foot; the camera on its 1/4-20 thread, its screw passed up
+    # through an access hole in the floor under it (wide enough for its head) on its driver
     foot = mounts.zed_foot
     for k, y in enumerate((foot.hi[1] - ZED_FOOT_SCREW_INSET_MM, foot.lo[1] + ZED_FOOT_SCREW_INSET_MM)):
         j.insert(f"zed_mount_{k}", (foot.centre[0], y, fo), UP, wall, ["case_lower"], "zed_mount")
     zm = zed_mount_thread(rig)
     shelf = mounts.zed_shelf
+    zs = zed_screw(rig)
+    access_d = rig.dim(zs, "head_diameter_mm") + 2 * rig.desc.printing.fits.loose_mm
     for k, pt in enumerate(cameras.zed.mount_points()):
         p = cameras.zed_pose.apply(np.array(pt))
         shelf_t = shelf.hi[2] - shelf.lo[2]
-        j.tapped(f"zed_x_{k}", zed_screw(rig), zm.thread, (p[0], p[1], p[2] - shelf_t), UP, shelf_t, ["zed_mount"], "zed_x",
-                 zm.depth_mm)
+        access = Hole("case_lower", (p[0], p[1], fo - HOLE_LEAD_MM), UP, access_d, wall + 2 * HOLE_LEAD_MM)
+        j.tapped(f"zed_x_{k}", zs, zm.thread, (p[0], p[1], p[2] - shelf_t), UP, shelf_t, ["zed_mount"], "zed_x",
+                 zm.depth_mm, extra=(access,))
     # fans: self-tapping screws through the fan into its plate; the fan mount's boss screwed to the floor
     fan_screw_id = fan_screw()
     pilot = rig.dim(fan_screw_id, "pilot_hole_diameter_mm")

@@ -18,6 +18,9 @@ class Handle:
     part_id: str
     g: HandleGeometry
     hole_d: float
+    #: the access hole down through the grip over each inboard foot screw (which sits under the grip):
+    #: its screw drops through it and its driver reaches it (the "assembly order" check)
+    access_d: float
 
     def build(self) -> cq.Shape:
         g = self.g
@@ -34,11 +37,16 @@ class Handle:
                                     (s * px + g.post_width / 2, g.grip_d / 2, zc))))
         parts += [box(b) for b in g.foot_bounds()]
         holes = [cylinder(self.hole_d, g.foot + 0.2, (x, 0, -0.1)) for x in g.foot_screw_x()]
+        holes += [cylinder(self.access_d, zc + g.grip_d, (x, 0, g.foot)) for x in g.foot_screw_x()
+                  if abs(x) < g.grip_length / 2]
         return one_solid(cut_all(fuse_all(parts), holes))
 
 
 def handle(lay: Layout) -> Handle:
-    return Handle("handle", lay.handles.geometry, lay.fits.screw_hole_mm("M3"))
+    rig = lay.rig
+    head = rig.dim(rig.desc.enclosure.screw, "head_diameter_mm")
+    return Handle("handle", lay.handles.geometry, lay.fits.screw_hole_mm("M3"),
+                  access_d=head + 2 * rig.desc.printing.fits.loose_mm)
 
 
 PRINT = {"handle": PrintSetup((90.0, 0.0, 0.0), "on its side: flat faces top and bottom, octagon grip, no support")}

@@ -1,0 +1,102 @@
+"""The assembly-order check: every screw's driver reaches it at the guide's step that fits it."""
+import dataclasses
+
+import pytest
+
+from cad import checks
+from cad.assembly_order import STEPS, load_steps
+from cad.bought.fasteners import fastener_table
+from cad.geom import Bounds, bounds_of, box
+
+#: issue 16 item 4, measured on the model before the fix: the dock screws' heads (top face) and the
+#: Orin's underside (mm, rig z)
+ISSUE_DOCK_HEAD_TOP_Z, ISSUE_ORIN_BOTTOM_Z = -66.1, -64.1
+
+
+def _names(asm):
+    return [n.name for n in asm.nodes]
+
+
+def _old_order(asm):
+    """The steps as they were: the battery dock (step 'power') right after the Orin (step 'compute')."""
+    steps = load_steps(_names(asm))
+    ids = [s.id for s in steps]
+    p, c = ids.index("power"), ids.index("compute")
+    assert p < c, "the default order fits the dock first"
+    steps[p], steps[c] = steps[c], steps[p]
+    return [dataclasses.replace(s, number=k + 1) for k, s in enumerate(steps)]
+
+
+@pytest.mark.slow
+def test_the_default_rig_passes(asm):
+    r = checks.check_assembly_order(asm)
+    assert r.ok, r.details[:10]
+    screws = {n.name for n in asm.nodes if n.name.startswith("screw_")}
+    assert set(r.data) == screws and all(not d["blocked_by"] for d in r.data.values())
+    assert r.data["screw_battery_0"]["step"] == "power"
+
+
+@pytest.mark.slow
+def test_the_old_order_fails_on_the_dock_screws_under_the_orin(asm):
+    # the geometry, read from the placed shapes' boxes (not from the check): each dock screw's head is
+    # under the Orin's footprint, its top face 2 mm below the Orin's underside
+    orin = bounds_of(asm.node("jetson_agx_orin").shape(asm.cache))
+    assert orin.lo[2] == pytest.approx(ISSUE_ORIN_BOTTOM_Z, abs=0.05)
+    for k in range(4):
+        sb = bounds_of(asm.node(f"screw_battery_{k}").shape(asm.cache))
+        assert sb.hi[2] == pytest.approx(ISSUE_DOCK_HEAD_TOP_Z, abs=0.05)
+        assert orin.lo[0] < sb.lo[0] < sb.hi[0] < orin.hi[0] and orin.lo[1] < sb.lo[1] < sb.hi[1] < orin.hi[1]
+    r = checks.check_assembly_order(asm, steps=_old_order(asm))
+    assert not r.ok
+    blocked = {s for s, d in r.data.items() if d["blocked_by"]}
+    assert blocked == {f"screw_battery_{k}" for k in range(4)}
+    for k in range(4):
+        assert r.data[f"screw_battery_{k}"]["blocked_by"][0] == "jetson_agx_orin"
+        line = next(p for p in r.details if p.startswith(f"screw_battery_{k} "))
+        assert "'power'" in line and "jetson_agx_orin" in line and "'compute'" in line
+        assert f"{ISSUE_ORIN_BOTTOM_Z - ISSUE_DOCK_HEAD_TOP_Z:.1f} mm out from the screw head" in line
+
+
+def _orin_screw_axis(asm):
+    """screw_orin_0's head (bottom face, from its placed shape) and axis: driven from under the floor."""
+    sb = bounds_of(asm.node("screw_orin_0").shape(asm.cache))
+    return (sb.lo[0] + sb.hi[0]) / 2, (sb.lo[1] + sb.hi[1]) / 2, sb.lo[2]
+
+
+@pytest.mark.slow
+def test_a_part_over_a_screw_axis_fails(asm):
+    x, y, z = _orin_screw_axis(asm)
+    plate = box(Bounds((x - 5, y - 5, z - 21), (x + 5, y + 5, z - 20)))    # 20 mm under the head
+    r = checks.check_assembly_order(asm, extra=[("obstacle", plate)])
+    assert not r.ok
+    assert r.data["screw_orin_0"]["blocked_by"] == ["obstacle"]
+    assert any(p.startswith("screw_orin_0 (step") and "obstacle" in p and "20.0 mm out" in p for p in r.details)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("along, radius_of, delta, blocked", [
+    (20.0, "bit", +0.3, False),       # beside the bit: clear
+    (20.0, "bit", -0.3, True),        # grazing the bit
+    (100.0, "bit", +0.3, True),       # as close, but where the handle is
+    (100.0, "handle", +0.3, False),   # beside the handle
+    (100.0, "handle", -0.3, True),    # grazing the handle
+])
+def test_the_envelope_is_the_bit_then_the_handle(asm, along, radius_of, delta, blocked):
+    d = fastener_table().size("M3").driver
+    assert d.bit_length_mm < 100.0 < d.bit_length_mm + d.handle_length_mm
+    r_off = dict(bit=d.bit_diameter_mm / 2, handle=d.handle_diameter_mm / 2)[radius_of] + delta
+    x, y, z = _orin_screw_axis(asm)
+    # a 1 mm cube whose near face is r_off from the screw's axis (in +x), ``along`` below the head
+    cube = box(Bounds((x + r_off, y - 0.5, z - along - 1), (x + r_off + 1, y + 0.5, z - along)))
+    r = checks.check_assembly_order(asm, extra=[("obstacle", cube)])
+    assert ("obstacle" in r.data["screw_orin_0"]["blocked_by"]) is blocked
+
+
+@pytest.mark.slow
+def test_the_check_reads_the_steps_as_the_guide_does(asm):
+    from bom.bom import build_bom
+    from bom.catalogue import load_catalogue
+    from docs.guide.steps import load_guide
+    guide = load_guide(asm, build_bom(asm, load_catalogue(asm.rig, None)))
+    mine = load_steps(_names(asm), STEPS)
+    assert [(s.id, list(s.nodes)) for s in mine] == [(s.id, s.nodes) for s in guide.steps]
