@@ -31,8 +31,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with --engine dask: a running scheduler, e.g. tcp://10.0.0.1:8786 (workers must see "
                         "the recordings and --out at the same paths)")
     p.add_argument("--calibration", metavar="DIR", type=Path,
-                   help="folder of mrcal .cameramodel files as `calibrate nominal` names them (default: the rig's "
-                        "nominal models)")
+                   help="folder of mrcal .cameramodel files as `calibrate nominal` names them (default: the "
+                        "recording's camera_info topics when it has them, else the rig's nominal models)")
+    p.add_argument("--topics", metavar="FILE", type=Path,
+                   help="a YAML topic map (stream: /topic) for a recording in neither this rig's layout nor the "
+                        "TartanRGBT stack's (both detected without it); see docs/dataset.md")
     p.add_argument("--tolerance-ms", type=float, default=None,
                    help="pairing tolerance after the offsets (default processing.pair_tolerance_ms)")
     p.add_argument("--ffc-margin", type=int, default=None, metavar="FRAMES",
@@ -48,6 +51,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def cmd_export(args: argparse.Namespace) -> int:
     from ..dataset.export import ExportError, Params, export
+    from ..dataset.layout import LayoutError, load_topic_map
     if args.rate is not None and not 0 < args.rate <= 1000:
         raise UserError(f"--rate {args.rate:g}: expected more than 0 and at most 1000 Hz")
     if args.workers < 1:
@@ -60,12 +64,17 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise UserError(f"--ffc-margin {args.ffc_margin}: expected 0 or more")
     if args.scheduler and args.engine != "dask":
         raise UserError("--scheduler needs --engine dask")
+    try:
+        topic_map = load_topic_map(args.topics) if args.topics else None
+    except LayoutError as exc:
+        raise UserError(str(exc)) from None
     rig = rig_from_args(args)
     params = Params.from_rig(rig, rate_hz=args.rate, tolerance_ms=args.tolerance_ms, ffc_margin=args.ffc_margin,
                              keep_ffc=args.keep_ffc, chunk_size=args.chunk_size)
     try:
         summary = export(args.recordings, args.out, rig, params, calibration=args.calibration, engine=args.engine,
-                         workers=args.workers, scheduler=args.scheduler, recover=args.recover)
+                         workers=args.workers, scheduler=args.scheduler, recover=args.recover,
+                         topic_map=topic_map)
     except ExportError as exc:
         raise UserError(str(exc)) from None
     except KeyboardInterrupt:
@@ -78,6 +87,7 @@ def cmd_export(args: argparse.Namespace) -> int:
             c = r["counts"]
             print(f"{r['name']}: {c['sampled']} samples from {c['zed_left_frames']} ZED frames "
                   f"({c['complete']} complete pairs, {c['ffc_dropped']} dropped for FFC)")
+            print(f"{r['name']}: layout {r['layout']}; calibration: {r['calibration']['source']}")
         how = "already complete, " if summary["chunks_run"] == 0 else "resumed, " if summary["resumed"] else ""
         print(f"{summary['out']}: {summary['samples']} samples ({how}{summary['chunks_run']} of "
               f"{summary['chunks']} chunks run); index.csv, index.parquet")

@@ -24,6 +24,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                                                              "over time with FFC marked) and report.json there")
     p.add_argument("--recover", action="store_true",
                    help="salvage a truncated MCAP into NAME.recovered.mcap beside it (the original is kept)")
+    p.add_argument("--topics", metavar="FILE", type=Path,
+                   help="a YAML topic map (stream: /topic) for a recording in neither this rig's layout nor the "
+                        "TartanRGBT stack's (both detected without it)")
+    p.add_argument("--calibration", metavar="DIR", type=Path,
+                   help="report this folder of .cameramodel files as the calibration (default: the recording's "
+                        "camera_info, else the rig's nominal models); the export uses the same rule")
     add_rig_options(p)
     add_output_options(p)
     p.set_defaults(handler=cmd_sync_check)
@@ -69,20 +75,29 @@ def _fmt(v, spec=".2f") -> str:
 
 
 def cmd_sync_check(args: argparse.Namespace) -> int:
+    from ..dataset.calib import CalibrationError, for_recording
+    from ..dataset.layout import LayoutError, load_topic_map
     from ..dataset.recording import RecordingError, open_recording
     from ..dataset.sync import Limits, analyse
     rig = rig_from_args(args)
     try:
-        rec = open_recording(args.recording, rig, recover=args.recover)
+        topic_map = load_topic_map(args.topics) if args.topics else None
+        rec = open_recording(args.recording, rig, recover=args.recover, topic_map=topic_map)
         report = analyse(rec, rig, Limits.from_rig(rig))
-    except RecordingError as exc:
+        cal = for_recording(rig, rec, args.calibration)
+    except (RecordingError, LayoutError, CalibrationError) as exc:
         raise UserError(str(exc)) from None
+    report["layout"] = rec.layout
+    report["calibration"] = cal.to_dict()
+    report["depth"] = rec.streams["zed_depth"].topic if rec.has("zed_depth") else None
     if args.plots:
         report["plots"] = _plots(report, args.plots, rig)
     if args.json:
         print_json(_public(report))
     elif not args.quiet:
         print(f"{rec.path}: {report['verdict'].upper()}")
+        print(f"layout {rec.layout}; calibration: {cal.source}"
+              + ("" if report["depth"] else "; no depth topic (sync only: the export needs depth)"))
         print(f"{'stream':<15} {'frames':>7} {'mean ms':>8} {'std ms':>7} {'max ms':>7} {'jitter':>7} "
               f"{'drops':>6} {'missing':>8}")
         for name, s in report["streams"].items():

@@ -8,6 +8,13 @@ Recorded images are often smaller than the calibrated ones (the ZED publishes at
 ``on_device.zed_pub_downscale_factor``; the simulator scales everything): :func:`at_recorded_size` carries a
 model to the recorded size with :func:`platform_tools.rig.cameras.scaled`. A recording whose images do not
 have the calibrated aspect ratio is refused: that calibration is not of these cameras.
+
+A bag may carry its own calibration as ``sensor_msgs/CameraInfo`` topics (the released TartanRGBT stack records
+the ZED's factory calibration and the Bosons' models): :func:`for_recording` then takes each camera's
+intrinsics from its camera_info (plumb_bob -> LENSMODEL_OPENCV5, or PINHOLE when every coefficient is 0;
+rational_polynomial -> OPENCV8) and its pose from the rig's nominal extrinsics (camera_info holds none). The
+rig's nominal models are the fallback for a camera without camera_info (or with an uncalibrated one, K = 0);
+``--calibration DIR`` overrides both. ``Calibration.source`` says which was used, per camera.
 """
 from __future__ import annotations
 
@@ -81,6 +88,56 @@ class Calibration:
     def to_dict(self) -> dict:
         return {"source": self.source, "sha256": self.sha256,
                 "cameras": {n: model_to_dict(m) for n, m in self.cams.items()}}
+
+
+#: camera_info distortion model -> (mrcal lens model, number of coefficients it takes)
+DISTORTION = {"plumb_bob": ("LENSMODEL_OPENCV5", 5), "rational_polynomial": ("LENSMODEL_OPENCV8", 8)}
+
+
+def from_camera_info(info: dict, where: str) -> tuple[str, list[float]] | None:
+    """(mrcal lens model, intrinsics) of a camera_info dict (recording.Recording.camera_info), None when it is
+    uncalibrated (K all 0); :class:`CalibrationError` naming ``where`` for a model this cannot represent."""
+    k = info["k"]
+    fx, fy, cx, cy = k[0], k[4], k[2], k[5]
+    if fx <= 0 or fy <= 0 or info["width"] <= 0 or info["height"] <= 0:
+        return None
+    d = list(info["d"])
+    if not any(d):
+        return "LENSMODEL_PINHOLE", [fx, fy, cx, cy]
+    dm = info["distortion_model"] or "plumb_bob"
+    if dm not in DISTORTION or len(d) > DISTORTION[dm][1]:
+        raise CalibrationError(f"{where}: distortion model {dm!r} with {len(d)} coefficients: not readable "
+                               f"(expected {' or '.join(DISTORTION)}); give the calibration with --calibration")
+    lens, n = DISTORTION[dm]
+    return lens, [fx, fy, cx, cy] + d + [0.0] * (n - len(d))
+
+
+def for_recording(rig, rec, path: Path | None = None) -> Calibration:
+    """The calibration an export of ``rec`` uses: ``path``'s models when given, else each camera's camera_info
+    (posed with the nominal extrinsics), else the rig's nominal model."""
+    if path is not None:
+        return load_calibration(rig, path)
+    nominal = load_calibration(rig)
+    cams, used = dict(nominal.cams), []
+    for stream, frame in FRAME_OF.items():
+        info = rec.camera_info.get(stream)
+        lens = from_camera_info(info, f"{rec.path}: {info['topic']}") if info else None
+        if lens is None:
+            continue
+        cams[frame] = camera_model(lens[0], lens[1], (info["width"], info["height"]),
+                                   nominal.cams[frame].extrinsics_rt_fromref())
+        used.append(stream)
+    if not used:
+        return nominal
+    rest = [s for s, f in FRAME_OF.items() if s not in used]
+    source = (f"camera_info ({', '.join(used)}; extrinsics nominal)"
+              + (f", {nominal.source} for {', '.join(rest)}" if rest else f", rig {rig.desc.name} {rig.hash[:12]}"))
+    texts = []
+    for frame in FILES:
+        buf = io.StringIO()
+        cams[frame].write(buf)
+        texts.append(buf.getvalue())
+    return Calibration(source, hashlib.sha256("".join(texts).encode()).hexdigest(), cams)
 
 
 def load_calibration(rig, path: Path | None = None) -> Calibration:

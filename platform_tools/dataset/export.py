@@ -36,7 +36,7 @@ from typing import Callable
 
 from platform_tools.rig import atomic
 from . import thermal8
-from .calib import CalibrationError, at_recorded_size, load_calibration, model_to_dict
+from .calib import CalibrationError, at_recorded_size, for_recording, load_calibration, model_to_dict
 from .chunk import process_chunk
 from .decode import IMAGE_STREAMS, probe_sizes
 from .engines import ENGINES, EngineError
@@ -128,20 +128,23 @@ def check_out(out: Path, manifest: dict) -> dict | None:
 
 def export(recordings: list[Path], out: Path, rig, params: Params, *, calibration: Path | None = None,
            engine: str = "pool", workers: int = 1, scheduler: str | None = None, recover: bool = False,
-           on_chunk: Callable[[str], None] | None = None) -> dict:
+           on_chunk: Callable[[str], None] | None = None, topic_map=None) -> dict:
+    """``calibration``: a folder of models overriding the recordings' camera_info and the nominal models;
+    ``topic_map``: a :class:`.layout.Layout` (``--topics``) instead of the detected layout."""
     out = Path(out)
     try:
-        cal = load_calibration(rig, calibration)
+        fixed = load_calibration(rig, calibration) if calibration is not None else None
     except CalibrationError as exc:
         raise ExportError(str(exc)) from None
-    recs, plans, tasks_by_rec, idents = [], [], [], []
+    recs, plans, tasks_by_rec, idents, cals = [], [], [], [], []
     names = set()
     for path in recordings:
         try:
-            rec = open_recording(path, rig, recover=recover)
+            rec = open_recording(path, rig, recover=recover, topic_map=topic_map)
             pl = plan(rec, rig, rate_hz=params.rate_hz, tolerance_ms=params.tolerance_ms,
                       ffc_margin=params.ffc_margin, keep_ffc=params.keep_ffc)
-        except RecordingError as exc:
+            cal = fixed or for_recording(rig, rec)
+        except (RecordingError, CalibrationError) as exc:
             raise ExportError(str(exc)) from None
         if rec.name in names:
             raise ExportError(f"{path}: two recordings named {rec.name!r}; give each a distinct folder name")
@@ -161,8 +164,10 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
             raise ExportError(str(exc)) from None
         recs.append(rec)
         plans.append(pl)
+        cals.append(cal)
         idents.append(rec.identity() | {"offsets_ms": pl.offsets_ms, "clock_steps": pl.clock_steps,
-                                        "counts": pl.counts})
+                                        "counts": pl.counts, "layout": rec.layout,
+                                        "calibration": {"source": cal.source, "sha256": cal.sha256}})
         topics = {s: rec.streams[s].topic for s in IMAGE_STREAMS}
         chunks = []
         for c0 in range(0, len(pl.pairs), params.chunk_size):
@@ -174,10 +179,10 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
                            "calibration_source": cal.source, "calibration_sha256": cal.sha256,
                            "rig_hash": rig.hash})
         tasks_by_rec.append(chunks)
+    calibration_used = _calibration_used(cals)
     manifest = {"format": FORMAT, "recordings": [{k: v for k, v in i.items() if k != "clock_steps"} | {
         "clock_steps": i["clock_steps"]} for i in idents],
-        "params": asdict(params), "calibration": {"source": cal.source, "sha256": cal.sha256},
-        "rig_hash": rig.hash}
+        "params": asdict(params), "calibration": calibration_used, "rig_hash": rig.hash}
     manifest["fingerprint"] = _fingerprint(manifest)
     old = check_out(out, manifest)
     out.mkdir(parents=True, exist_ok=True)
@@ -185,7 +190,9 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
     tasks = [t for ch in tasks_by_rec for t in ch]
     done = {p.stem for p in (out / CHUNKS).glob("*.json") if _chunk_complete(out, p)}
     todo = [t for t in tasks if t["id"] not in done]
-    manifest |= {"status": "running", "calibration_models": cal.to_dict(),
+    models = (cals[0].to_dict() if len({c.sha256 for c in cals}) == 1
+              else {"per_recording": {r.name: c.to_dict() for r, c in zip(recs, cals)}})
+    manifest |= {"status": "running", "calibration_models": models,
                  "chunks": len(tasks), "samples": sum(len(t["pairs"]) for t in tasks)}
     atomic.write_text(out / MANIFEST, json.dumps(manifest, indent=2) + "\n")
     resumed = old is not None and len(done) > 0
@@ -213,7 +220,15 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
     atomic.write_text(out / MANIFEST, json.dumps(manifest, indent=2) + "\n")
     return {"out": str(out), "samples": len(rows), "chunks": len(tasks), "chunks_run": len(todo),
             "resumed": resumed, "engine": engine, "recordings": idents,
-            "calibration": {"source": cal.source, "sha256": cal.sha256}}
+            "calibration": calibration_used}
+
+
+def _calibration_used(cals: list) -> dict:
+    """The manifest's calibration: the one every recording used, or each recording's, hashed together."""
+    if len({c.sha256 for c in cals}) == 1:
+        return {"source": cals[0].source, "sha256": cals[0].sha256}
+    return {"source": " | ".join(dict.fromkeys(c.source for c in cals)),
+            "sha256": hashlib.sha256("".join(c.sha256 for c in cals).encode()).hexdigest()}
 
 
 # ----------------------------------------------------------------------------- the index

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .layout import NO_DEPTH_HINT
 from .recording import Recording
 from .sync import corrected, ffc_periods, find_clock_steps, offsets_ns, triggers
 
@@ -52,7 +53,8 @@ def plan(rec: Recording, rig, *, rate_hz: float, tolerance_ms: float, ffc_margin
          keep_ffc: bool = False) -> Plan:
     rec.require("thermal_left", "thermal_right", why="the export pairs both thermal cameras with the ZED")
     rec.require("zed_left", "zed_right", why="the export pairs the ZED left and right images")
-    rec.require("zed_depth", why="registration of RGB into the thermal views needs the ZED depth")
+    rec.require("zed_depth", why="registration of RGB into the thermal views needs the ZED depth: "
+                                 + NO_DEPTH_HINT)
     period = 1e9 / rig.desc.sync.rate_hz
     steps = find_clock_steps(rec, period)
     off = offsets_ns(rec, rig)

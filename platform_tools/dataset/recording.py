@@ -4,7 +4,10 @@ A recording is given as a rosbag2 folder (``metadata.yaml`` + MCAP files), a fol
 (``simulate-rig`` writes ``DIR/bag``), or MCAP files. The index holds, per rig stream, each message's
 header stamp (read straight from the CDR bytes: encapsulation header, then ``int32 sec``,
 ``uint32 nanosec``), its log time (to find it again) and, for thermal images, whether its pixels
-repeat the previous frame's (a frozen frame: FFC). The thermal status topic is decoded (it is small).
+repeat the previous frame's (a frozen frame: FFC). The thermal status topic is decoded (it is small;
+:mod:`.ffcstatus`), and so are the ``sensor_msgs/CameraInfo`` topics (the calibration a bag may carry). Which
+topics those are comes from the recording's layout (:mod:`.layout`: this rig's, the released TartanRGBT
+stack's, or a ``--topics`` map), detected from the topics the bag holds; every other topic is ignored.
 When a thermal camera has no status messages, its FFC state comes from the Boson telemetry rows of
 its frames instead (``platform_tools.boson.telemetry``; a frozen frame is then judged on the image rows
 only: the telemetry keeps changing during an FFC).
@@ -61,6 +64,11 @@ class Recording:
     #: thermal camera -> "status" (the status topic), "telemetry" (the frames' telemetry rows) or None
     status_source: dict[str, str | None] = field(default_factory=dict)
     recovered: list[str] = field(default_factory=list)
+    #: the topic layout (layout.Layout.name): "project", "tartanrgbt" or a topic map's path
+    layout: str = "project"
+    #: camera (zed_left, zed_right, thermal_left, thermal_right) -> its latest sensor_msgs/CameraInfo, as
+    #: {"topic", "width", "height", "distortion_model", "d", "k", "p"} (lists of floats)
+    camera_info: dict = field(default_factory=dict)
 
     def has(self, name: str) -> bool:
         return name in self.streams and len(self.streams[name].stamp_ns) > 0
@@ -69,7 +77,8 @@ class Recording:
         missing = [n for n in names if not self.has(n)]
         if missing:
             topics = ", ".join(sorted({self.streams[n].topic for n in missing if n in self.streams}
-                                      | {self._topics.get(n, n) for n in missing}))
+                                      | {self._topics.get(n, f"no {n} topic in the {self.layout} layout")
+                                         for n in missing}))
             raise RecordingError(f"{self.path}: no {' / '.join(missing)} messages ({topics}); {why}")
 
     _topics: dict = field(default_factory=dict)
@@ -219,30 +228,80 @@ def telemetry_rows(rig, width: int, height: int) -> int:
     return rows if telemetry_rows_present(width, height, model.width_px, model.height_px, rows) else 0
 
 
-def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS) -> Recording:
-    """Index a recording's rig streams (and the thermal FFC status)."""
+def _channels(files: list[Path]) -> dict[str, tuple[str, Path]]:
+    """topic -> (schema name, first file holding it), from the MCAP summaries."""
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+    out: dict[str, tuple[str, Path]] = {}
+    for f in files:
+        try:
+            with open(f, "rb") as fh:
+                summary = make_reader(fh).get_summary()
+        except (McapError, EOFError, struct.error, ValueError) as exc:
+            raise RecordingError(f"{f}: damaged MCAP ({type(exc).__name__}: {exc}); "
+                                 f"run again with --recover to salvage what is readable") from None
+        if summary is None:
+            continue
+        for ch in summary.channels.values():
+            sc = summary.schemas.get(ch.schema_id)
+            out.setdefault(ch.topic, (sc.name if sc else "", f))
+    return out
+
+
+def _info(m, topic: str) -> dict:
+    return {"topic": topic, "width": int(m.width), "height": int(m.height),
+            "distortion_model": str(m.distortion_model), "d": [float(x) for x in m.d],
+            "k": [float(x) for x in m.k], "p": [float(x) for x in m.p]}
+
+
+def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, topic_map=None) -> Recording:
+    """Index a recording's rig streams (and the thermal FFC status, and its camera_info); ``topic_map``: a
+    :class:`.layout.Layout` from ``--topics`` (default: detected)."""
     from mcap.exceptions import McapError
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
 
+    from . import ffcstatus
+    from .layout import INFO_KEYS, LayoutError, detect
+
     name, files = mcap_files(path)
     files, notes = resolve_files(files, recover)
-    topics = rig.desc.on_device.topics
-    by_topic = {getattr(topics, s): s for s in streams}
-    status_topics = {getattr(topics, s): s.removesuffix("_status") for s in STATUS}
-    cols: dict[str, list] = {s: [] for s in streams}
+    channels = _channels(files)
+    try:
+        lay = detect(Path(path), set(channels), rig, topic_map)
+    except LayoutError as exc:
+        raise RecordingError(str(exc)) from None
+    topics = lay.topics
+    by_topic = {topics[s]: s for s in streams if s in topics}
+    status_topics = {topics[s]: s.removesuffix("_status") for s in STATUS if s in topics}
+    info_topics = {topics[k]: k.removesuffix("_info") for k in INFO_KEYS if k in topics}
+    status_types = {}
+    for topic in status_topics:
+        if topic in channels:
+            schema_name, f = channels[topic]
+            try:
+                status_types[topic] = ffcstatus.check_type(schema_name)
+            except ffcstatus.StatusTypeError as exc:
+                raise RecordingError(f"{f}: {topic}: {exc}") from None
+    for topic in info_topics:
+        if topic in channels and ffcstatus.normalise(channels[topic][0]) != "sensor_msgs/msg/CameraInfo":
+            raise RecordingError(f"{channels[topic][1]}: {topic}: camera_info of type {channels[topic][0]}; "
+                                 f"expected sensor_msgs/msg/CameraInfo")
+    cols: dict[str, list] = {s: [] for s in by_topic.values()}
     tails: dict[str, bytes] = {}
     status: dict[str, list[tuple[int, int]]] = {c: [] for c in status_topics.values()}
-    from_telemetry: dict[str, list[tuple[int, int]]] = {c: [] for c in status_topics.values()}
+    from_telemetry: dict[str, list[tuple[int, int]]] = {c: [] for c in ("thermal_left", "thermal_right")}
     tele_rows: dict[tuple[str, int, int], int] = {}
+    infos: dict[str, dict] = {}
+    last_stamp: dict[str, int] = {}
     decoder = DecoderFactory()
     decoders: dict[int, object] = {}
+    wanted = [t for t in list(by_topic) + list(status_topics) + list(info_topics) if t in channels]
     for fi, f in enumerate(files):
         try:
             with open(f, "rb") as fh:
                 reader = make_reader(fh)
-                for schema, channel, msg in reader.iter_messages(
-                        topics=list(by_topic) + list(status_topics), log_time_order=True):
+                for schema, channel, msg in reader.iter_messages(topics=wanted, log_time_order=True):
                     s = by_topic.get(channel.topic)
                     if s is not None:
                         frozen = False
@@ -251,35 +310,37 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS) -
                             tail = _thermal_tail(msg.data, s, stamp, rig, tele_rows, from_telemetry)
                             frozen = tails.get(s) == tail
                             tails[s] = tail
+                            last_stamp[s] = stamp
                         cols[s].append((stamp, msg.log_time, fi, frozen))
-                    else:
-                        dec = decoders.get(schema.id)
-                        if dec is None:
-                            dec = decoders[schema.id] = decoder.decoder_for("cdr", schema)
-                        m = dec(msg.data)
-                        stamp = m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
-                        for st in m.status:
-                            values = {kv.key: kv.value for kv in st.values}
-                            if "ffc_status" in values:
-                                status[status_topics[channel.topic]].append((stamp, int(values["ffc_status"])))
+                        continue
+                    dec = decoders.get((fi, schema.id))
+                    if dec is None:
+                        dec = decoders[(fi, schema.id)] = decoder.decoder_for("cdr", schema)
+                    m = dec(msg.data)
+                    if channel.topic in info_topics:
+                        infos[info_topics[channel.topic]] = _info(m, channel.topic)
+                        continue
+                    cam = status_topics[channel.topic]
+                    status[cam] += ffcstatus.rows(status_types[channel.topic], m, msg.log_time, last_stamp.get(cam))
         except (McapError, EOFError, struct.error, ValueError) as exc:
             raise RecordingError(f"{f}: damaged MCAP ({type(exc).__name__}: {exc}); "
                                  f"run again with --recover to salvage what is readable") from None
     source = {}
-    for cam in status:
-        if status[cam]:
+    for cam in from_telemetry:
+        if status.get(cam):
             source[cam] = "status"
         elif from_telemetry[cam]:
             status[cam], source[cam] = from_telemetry[cam], "telemetry"
         else:
-            source[cam] = None
+            status[cam], source[cam] = [], None
     out = {}
     for s, rows in cols.items():
         a = np.array(rows, dtype=np.int64).reshape(-1, 4)
-        out[s] = Stream(s, getattr(topics, s), a[:, 0], a[:, 1], a[:, 2].astype(np.int16),
+        out[s] = Stream(s, topics[s], a[:, 0], a[:, 1], a[:, 2].astype(np.int16),
                         a[:, 3].astype(bool) if s.startswith("thermal") else None)
-    rec = Recording(name, Path(path), files, out, status, status_source=source, recovered=notes)
-    rec._topics = {s: getattr(topics, s) for s in streams}
+    rec = Recording(name, Path(path), files, out, status, status_source=source, recovered=notes,
+                    layout=lay.name, camera_info=infos)
+    rec._topics = {s: topics[s] for s in streams if s in topics}
     return rec
 
 

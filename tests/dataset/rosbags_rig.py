@@ -55,7 +55,8 @@ class Spec:
     ffc: dict = field(default_factory=lambda: {"thermal_left": (70, 84)})
     #: (trigger at which the host clock steps, size in ms, "zed" | "thermal" | "all")
     steps: tuple = ()
-    status: str | None = "diagnostic"      # "diagnostic" | "bool" | None (no status topic)
+    status: str | None = "diagnostic"      # "diagnostic" | "bool" | "uint8" (a type nobody publishes) | None
+    extra: bool = False                    # the upstream topics a reader ignores (UPSTREAM_EXTRA, /diagnostics)
     zed_compressed: bool = True            # the project's ZED topics are JPEG; upstream's raw bgra8
     depth: bool = True
     camera_info: bool = False
@@ -166,6 +167,9 @@ def write(path: Path, spec: Spec, topics: dict[str, str], storage: str = "mcap",
             elif spec.status == "bool":
                 msgs.append((log + 1_000_000, topics[f"{cam}_status"], "std_msgs/msg/Bool",
                              ts.types["std_msgs/msg/Bool"](data=bool(in_ffc))))
+            elif spec.status == "uint8":
+                msgs.append((log + 1_000_000, topics[f"{cam}_status"], "std_msgs/msg/UInt8",
+                             ts.types["std_msgs/msg/UInt8"](data=2 if in_ffc else 0)))
     _, ti, hi = tl["zed_imu"]
     V3, Q = ts.types["geometry_msgs/msg/Vector3"], ts.types["geometry_msgs/msg/Quaternion"]
     for t, h in zip(ti, hi):
@@ -174,6 +178,8 @@ def write(path: Path, spec: Spec, topics: dict[str, str], storage: str = "mcap",
             orientation_covariance=np.zeros(9), angular_velocity=V3(x=0.0, y=0.0, z=0.0),
             angular_velocity_covariance=np.zeros(9), linear_acceleration=V3(x=0.0, y=0.0, z=9.81),
             linear_acceleration_covariance=np.zeros(9))))
+    if spec.extra:
+        msgs += _extra(ts, tz)
     for topic, msg in (infos or {}).items():
         msgs.append((T0_NS, topic, "sensor_msgs/msg/CameraInfo", msg))
     msgs.sort(key=lambda m: m[0])
@@ -185,3 +191,27 @@ def write(path: Path, spec: Spec, topics: dict[str, str], storage: str = "mcap",
                 conns[topic] = w.add_connection(topic, typ, typestore=ts)
             w.write(conns[topic], log, ts.serialize_cdr(msg, typ))
     return truth
+
+
+#: a stand-in for zed_msgs/msg/HeartBeat (a type outside rosbags' store, as a real bag's would be)
+HEARTBEAT_MSG = "uint64 beat_count\nstring node_ns\nstring full_name\nstring camera_sn\n"
+
+
+def _extra(ts, tz) -> list:
+    """Messages on the upstream topics a reader must ignore: heartbeat, health frequency, robot description,
+    /diagnostics (a DiagnosticArray that is no camera's FFC status)."""
+    from rosbags.typesys import get_types_from_msg
+    ts.register(get_types_from_msg(HEARTBEAT_MSG, "zed_msgs/msg/HeartBeat"))
+    hb, f32, s = ts.types["zed_msgs/msg/HeartBeat"], ts.types["std_msgs/msg/Float32"], ts.types["std_msgs/msg/String"]
+    beat, freq, desc = UPSTREAM_EXTRA
+    out = [(T0_NS, desc, "std_msgs/msg/String", s(data="<robot name='zedx'/>"))]
+    kv = ts.types["diagnostic_msgs/msg/KeyValue"]
+    for i, t in enumerate(tz[::10]):
+        out.append((int(t) + 2_000_000, beat, "zed_msgs/msg/HeartBeat",
+                     hb(beat_count=i, node_ns="/zed", full_name="/zed/zed_node", camera_sn="40000001")))
+        out.append((int(t) + 3_000_000, freq, "std_msgs/msg/Float32", f32(data=30.0)))
+        st = ts.types["diagnostic_msgs/msg/DiagnosticStatus"](level=0, name="zed", message="ok", hardware_id="zed",
+                                                              values=[kv(key="ffc_status", value="2")])
+        out.append((int(t) + 4_000_000, "/diagnostics", "diagnostic_msgs/msg/DiagnosticArray",
+                    ts.types["diagnostic_msgs/msg/DiagnosticArray"](header=_header(ts, int(t), ""), status=[st])))
+    return out
