@@ -14,8 +14,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "offsets), drop thermal frames during FFC and processing.ffc_margin_frames on each "
                                    "side, sample at --rate, convert thermal to 8-bit as the paper (min-max with "
                                    "percentile clip, CLAHE, bilateral; processing.thermal_8bit) keeping the 16-bit "
-                                   "original, register the ZED left RGB into each thermal view from the recorded "
-                                   "depth (z-buffer, bilinear splatting, validity mask), and write PNGs with "
+                                   "original, register the ZED left RGB into each thermal view from the ZED "
+                                   "depth (--depth; z-buffer, bilinear splatting, validity mask), and write PNGs with "
                                    "index.csv / index.parquet. Run the same command again to resume an interrupted "
                                    "export; a folder holding a different export is refused.")
     p.add_argument("recordings", metavar="RECORDING", nargs="+", type=Path,
@@ -36,6 +36,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--topics", metavar="FILE", type=Path,
                    help="a YAML topic map (stream: /topic) for a recording in neither this rig's layout nor the "
                         "TartanRGBT stack's (both detected without it); see docs/dataset.md")
+    p.add_argument("--depth", default="auto", metavar="recorded|stereo|MODULE:FUNCTION",
+                   help="where the ZED left depth comes from: recorded (the depth topic), stereo (OpenCV SGBM on "
+                        "the rectified left/right pair, CPU), or a plug-in function(left, right, calib) -> "
+                        "(depth_m, confidence) for learned stereo (docs/dataset.md); default: recorded when the "
+                        "recording has a depth topic, else stereo")
     p.add_argument("--tolerance-ms", type=float, default=None,
                    help="pairing tolerance after the offsets (default processing.pair_tolerance_ms)")
     p.add_argument("--ffc-margin", type=int, default=None, metavar="FRAMES",
@@ -52,6 +57,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def cmd_export(args: argparse.Namespace) -> int:
     from ..dataset.export import ExportError, Params, export
     from ..dataset.layout import LayoutError, load_topic_map
+    from ..dataset.stereo import BUILT_IN, StereoError, load_plugin
     if args.rate is not None and not 0 < args.rate <= 1000:
         raise UserError(f"--rate {args.rate:g}: expected more than 0 and at most 1000 Hz")
     if args.workers < 1:
@@ -62,6 +68,11 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise UserError(f"--tolerance-ms {args.tolerance_ms:g}: expected more than 0")
     if args.ffc_margin is not None and args.ffc_margin < 0:
         raise UserError(f"--ffc-margin {args.ffc_margin}: expected 0 or more")
+    if args.depth not in BUILT_IN:
+        try:
+            load_plugin(args.depth)
+        except StereoError as exc:
+            raise UserError(str(exc)) from None
     if args.scheduler and args.engine != "dask":
         raise UserError("--scheduler needs --engine dask")
     try:
@@ -70,7 +81,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise UserError(str(exc)) from None
     rig = rig_from_args(args)
     params = Params.from_rig(rig, rate_hz=args.rate, tolerance_ms=args.tolerance_ms, ffc_margin=args.ffc_margin,
-                             keep_ffc=args.keep_ffc, chunk_size=args.chunk_size)
+                             keep_ffc=args.keep_ffc, chunk_size=args.chunk_size, depth=args.depth)
     try:
         summary = export(args.recordings, args.out, rig, params, calibration=args.calibration, engine=args.engine,
                          workers=args.workers, scheduler=args.scheduler, recover=args.recover,
@@ -87,7 +98,7 @@ def cmd_export(args: argparse.Namespace) -> int:
             c = r["counts"]
             print(f"{r['name']}: {c['sampled']} samples from {c['zed_left_frames']} ZED frames "
                   f"({c['complete']} complete pairs, {c['ffc_dropped']} dropped for FFC)")
-            print(f"{r['name']}: layout {r['layout']}; calibration: {r['calibration']['source']}")
+            print(f"{r['name']}: layout {r['layout']}; depth {r['depth']}; calibration: {r['calibration']['source']}")
         how = "already complete, " if summary["chunks_run"] == 0 else "resumed, " if summary["resumed"] else ""
         print(f"{summary['out']}: {summary['samples']} samples ({how}{summary['chunks_run']} of "
               f"{summary['chunks']} chunks run); index.csv, index.parquet")

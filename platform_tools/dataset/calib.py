@@ -140,6 +140,43 @@ def for_recording(rig, rec, path: Path | None = None) -> Calibration:
     return Calibration(source, hashlib.sha256("".join(texts).encode()).hexdigest(), cams)
 
 
+#: the ZED right model in a calibration folder (needed only for depth from the stereo pair)
+ZED_RIGHT_FILE = "zed_x_right.cameramodel"
+
+
+def zed_right(rig, rec, path: Path | None = None):
+    """The ZED right camera's model for stereo depth: ``path``/zed_x_right.cameramodel when ``--calibration`` is
+    given, else the recording's right camera_info (posed with the nominal extrinsics), else the rig's nominal model
+    when the recording's layout has no camera_info topic for it (rectified images, this rig's layout). A layout
+    that publishes raw images with their camera_info (TartanRGBT) without a right camera_info, or a folder without
+    the file: :class:`CalibrationError`, one line naming the topic or file."""
+    from platform_tools.rig.nominal import nominal_camera
+    import mrcal
+    frame = "zed_x_right_optical"
+    if path is not None:
+        f = Path(path) / ZED_RIGHT_FILE
+        if not f.is_file():
+            raise CalibrationError(f"{f}: missing: depth from the stereo pair needs the ZED right model beside "
+                                   f"the others (or --depth recorded)")
+        try:
+            return mrcal.cameramodel(str(f))
+        except Exception as exc:  # noqa: BLE001  mrcal raises plain Exceptions on bad files
+            raise CalibrationError(f"{f}: not a readable mrcal camera model ({exc})") from None
+    nominal = nominal_camera(rig, frame)
+    info = rec.camera_info.get("zed_right")
+    lens = from_camera_info(info, f"{rec.path}: {info['topic']}") if info else None
+    if lens is not None:
+        return camera_model(lens[0], lens[1], (info["width"], info["height"]), nominal.extrinsics_rt_fromref())
+    topic = rec._topics.get("zed_right_info")
+    if topic is not None or rec.camera_info.get("zed_left"):
+        what = (f"{topic}: no camera_info messages" if topic and not info else
+                f"{topic}: uncalibrated camera_info (K = 0)" if topic else "no zed_right_info topic in the "
+                f"{rec.layout} layout (the left image has a camera_info: raw images)")
+        raise CalibrationError(f"{rec.path}: {what}: depth from the stereo pair needs the ZED right calibration "
+                               f"(its camera_info, or --calibration DIR with {ZED_RIGHT_FILE})")
+    return nominal
+
+
 def load_calibration(rig, path: Path | None = None) -> Calibration:
     import mrcal
     texts, cams = [], {}

@@ -34,6 +34,22 @@ def _registrar(task: dict, side: str):
     return _registrars[key]
 
 
+_stereo: dict = {}
+
+
+def _depth(task: dict, got: dict) -> np.ndarray:
+    """The ZED left depth of one sample: recorded, or computed from the stereo pair (stereo.py)."""
+    if task["depth"] == "recorded":
+        return got["zed_depth"]
+    from .stereo import StereoCalibration, compute
+    key = json.dumps([task["cams"]["zed_x_left_optical"], task["cams"]["zed_x_right_optical"]], sort_keys=True)
+    if key not in _stereo:
+        _stereo[key] = StereoCalibration(model_from_dict(task["cams"]["zed_x_left_optical"]),
+                                         model_from_dict(task["cams"]["zed_x_right_optical"]),
+                                         f"{task['recording']}: the ZED pair")
+    return compute(task["depth"], got["zed_left"], got["zed_right"], _stereo[key])
+
+
 def _write_png(path: Path, img: np.ndarray) -> None:
     ok, buf = cv2.imencode(".png", img)
     if not ok:
@@ -71,7 +87,8 @@ def process_chunk(task: dict) -> list[dict]:
         name = f"{pair['sample']:06d}.png"
         row = {"recording": task["recording"], "sample": pair["sample"]}
         for s in IMAGE_STREAMS:
-            row[f"t_{s}_ns"] = pair["frames"][s]["stamp_ns"]
+            if s in pair["frames"]:
+                row[f"t_{s}_ns"] = pair["frames"][s]["stamp_ns"]
         for s, r in pair["residual_ms"].items():
             row[f"residual_{s}_ms"] = round(r, 4)
         zed = got["zed_left"]
@@ -79,7 +96,8 @@ def process_chunk(task: dict) -> list[dict]:
         _write_png(rec_dir / "zed_right" / name, got["zed_right"])
         row["zed_left_png"] = f"{task['recording']}/zed_left/{name}"
         row["zed_right_png"] = f"{task['recording']}/zed_right/{name}"
-        depth = got["zed_depth"]
+        depth = _depth(task, got)
+        row["depth_source"] = task["depth"]
         for cam in THERMAL:
             raw = got[cam]
             if raw.shape[0] > thermal_h:          # Boson telemetry rows appended below the image

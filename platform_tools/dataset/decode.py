@@ -58,6 +58,8 @@ def probe_sizes(rec: Recording) -> dict[str, tuple[int, int]]:
     """(width, height) of the first message of each image stream."""
     out = {}
     for s in IMAGE_STREAMS:
+        if not rec.has(s):          # no depth topic: depth from the stereo pair
+            continue
         st = rec.streams[s]
         i = int(np.argmin(st.log_ns))
         wanted = {(st.topic, int(st.stamp_ns[i])): s}

@@ -36,12 +36,13 @@ from typing import Callable
 
 from platform_tools.rig import atomic
 from . import thermal8
-from .calib import CalibrationError, at_recorded_size, for_recording, load_calibration, model_to_dict
+from .calib import CalibrationError, at_recorded_size, for_recording, load_calibration, model_to_dict, zed_right
 from .chunk import process_chunk
 from .decode import IMAGE_STREAMS, probe_sizes
 from .engines import ENGINES, EngineError
 from .pairing import plan
 from .recording import RecordingError, open_recording, telemetry_rows
+from .stereo import BUILT_IN, StereoError, load_plugin
 
 log = logging.getLogger(__name__)
 FORMAT = "rgbt-rig export 1"
@@ -63,16 +64,18 @@ class Params:
     min_coverage: float
     chunk_size: int
     thermal_8bit: dict
+    #: "auto" (recorded when the recording has depth, else stereo), "recorded", "stereo" or a "module:function"
+    depth: str = "auto"
 
     @classmethod
     def from_rig(cls, rig, *, rate_hz=None, tolerance_ms=None, ffc_margin=None, keep_ffc=False,
-                 min_coverage=0.5, chunk_size=8) -> "Params":
+                 min_coverage=0.5, chunk_size=8, depth="auto") -> "Params":
         p = rig.desc.processing
         return cls(float(rate_hz if rate_hz is not None else p.pair_rate_hz),
                    float(tolerance_ms if tolerance_ms is not None else p.pair_tolerance_ms),
                    int(ffc_margin if ffc_margin is not None else p.ffc_margin_frames), bool(keep_ffc),
                    float(p.zbuffer_tolerance_percent), float(min_coverage), int(chunk_size),
-                   asdict(thermal8.Params.from_rig(rig)))
+                   asdict(thermal8.Params.from_rig(rig)), str(depth))
 
 
 # ----------------------------------------------------------------------------- the export
@@ -132,6 +135,11 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
     """``calibration``: a folder of models overriding the recordings' camera_info and the nominal models;
     ``topic_map``: a :class:`.layout.Layout` (``--topics``) instead of the detected layout."""
     out = Path(out)
+    if params.depth not in BUILT_IN:
+        try:
+            load_plugin(params.depth)
+        except StereoError as exc:
+            raise ExportError(str(exc)) from None
     try:
         fixed = load_calibration(rig, calibration) if calibration is not None else None
     except CalibrationError as exc:
@@ -141,9 +149,12 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
     for path in recordings:
         try:
             rec = open_recording(path, rig, recover=recover, topic_map=topic_map)
+            recorded_depth = params.depth == "recorded" or (params.depth == "auto" and rec.has("zed_depth"))
+            depth = "recorded" if recorded_depth else "stereo" if params.depth in BUILT_IN else params.depth
             pl = plan(rec, rig, rate_hz=params.rate_hz, tolerance_ms=params.tolerance_ms,
-                      ffc_margin=params.ffc_margin, keep_ffc=params.keep_ffc)
+                      ffc_margin=params.ffc_margin, keep_ffc=params.keep_ffc, depth=recorded_depth)
             cal = fixed or for_recording(rig, rec)
+            right = None if recorded_depth else zed_right(rig, rec, calibration)
         except (RecordingError, CalibrationError) as exc:
             raise ExportError(str(exc)) from None
         if rec.name in names:
@@ -152,7 +163,7 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
         sizes = probe_sizes(rec)
         w, h = sizes["thermal_left"]
         th_h = h - telemetry_rows(rig, w, h)   # Boson telemetry rows below the image: not part of the picture
-        if sizes["zed_depth"] != sizes["zed_left"]:
+        if recorded_depth and sizes["zed_depth"] != sizes["zed_left"]:
             raise ExportError(f"{rec.path}: the depth is {sizes['zed_depth'][0]}x{sizes['zed_depth'][1]}, the ZED "
                               f"left image {sizes['zed_left'][0]}x{sizes['zed_left'][1]}: depth_registered must "
                               f"be at the image's size")
@@ -160,15 +171,18 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
                     "thermal_right_optical": (sizes["thermal_right"][0], th_h)}
         try:
             cams = {n: at_recorded_size(n, cal.cams[n], size, str(rec.path)) for n, size in recorded.items()}
+            if right is not None:
+                cams["zed_x_right_optical"] = at_recorded_size("zed_x_right_optical", right, sizes["zed_right"],
+                                                               str(rec.path))
         except CalibrationError as exc:
             raise ExportError(str(exc)) from None
         recs.append(rec)
         plans.append(pl)
         cals.append(cal)
         idents.append(rec.identity() | {"offsets_ms": pl.offsets_ms, "clock_steps": pl.clock_steps,
-                                        "counts": pl.counts, "layout": rec.layout,
+                                        "counts": pl.counts, "layout": rec.layout, "depth": depth,
                                         "calibration": {"source": cal.source, "sha256": cal.sha256}})
-        topics = {s: rec.streams[s].topic for s in IMAGE_STREAMS}
+        topics = {s: rec.streams[s].topic for s in IMAGE_STREAMS if s != "zed_depth" or recorded_depth}
         chunks = []
         for c0 in range(0, len(pl.pairs), params.chunk_size):
             pairs = [asdict(p) for p in pl.pairs[c0:c0 + params.chunk_size]]
@@ -176,6 +190,7 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
                            "files": [str(f.resolve()) for f in rec.files], "topics": topics, "pairs": pairs,
                            "cams": {n: model_to_dict(m) for n, m in cams.items()},
                            "thermal_height": th_h, "params": asdict(params), "out": str(out.resolve()),
+                           "depth": depth,
                            "calibration_source": cal.source, "calibration_sha256": cal.sha256,
                            "rig_hash": rig.hash})
         tasks_by_rec.append(chunks)
@@ -210,7 +225,7 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
     if todo:
         try:
             run(process_chunk, todo, finished, workers, scheduler)
-        except (EngineError, RecordingError) as exc:
+        except (EngineError, RecordingError, StereoError) as exc:
             raise ExportError(str(exc)) from None
     rows = []
     for t in tasks:

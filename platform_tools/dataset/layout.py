@@ -44,8 +44,8 @@ TARTANRGBT = {
     "thermal_right_info": "/thermal_right/camera_info",
 }
 #: what records depth for each layout when it has none (for the refusal of an export that needs it)
-NO_DEPTH_HINT = ("record the ZED depth (on_device.zed_depth_mode) or name a depth topic (zed_depth) in a "
-                 "--topics map; depth computed from the stereo pair (issue 15 item 4) is not available yet")
+NO_DEPTH_HINT = ("record the ZED depth (on_device.zed_depth_mode), name a depth topic (zed_depth) in a "
+                 "--topics map, or compute it from the stereo pair (--depth stereo, the default without one)")
 
 
 class LayoutError(Exception):

@@ -50,20 +50,23 @@ def _nearest(t_sorted: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def plan(rec: Recording, rig, *, rate_hz: float, tolerance_ms: float, ffc_margin: int,
-         keep_ffc: bool = False) -> Plan:
+         keep_ffc: bool = False, depth: bool = True) -> Plan:
+    """``depth``: pair the recorded ZED depth too (False: depth is computed from the stereo pair)."""
     rec.require("thermal_left", "thermal_right", why="the export pairs both thermal cameras with the ZED")
     rec.require("zed_left", "zed_right", why="the export pairs the ZED left and right images")
-    rec.require("zed_depth", why="registration of RGB into the thermal views needs the ZED depth: "
-                                 + NO_DEPTH_HINT)
+    if depth:
+        rec.require("zed_depth", why="registration of RGB into the thermal views with --depth recorded needs "
+                                     "the ZED depth: " + NO_DEPTH_HINT)
+    others = OTHERS if depth else tuple(s for s in OTHERS if s != "zed_depth")
     period = 1e9 / rig.desc.sync.rate_hz
     steps = find_clock_steps(rec, period)
     off = offsets_ns(rec, rig)
-    tc = {s: corrected(rec.streams[s].stamp_ns, steps) for s in ("zed_left",) + OTHERS}
+    tc = {s: corrected(rec.streams[s].stamp_ns, steps) for s in ("zed_left",) + others}
     order = {s: np.argsort(tc[s], kind="stable") for s in tc}
     ref = tc["zed_left"]
     match, ok = {}, np.ones(len(ref), bool)
     resid = {}
-    for s in ("zed_right", "zed_depth"):      # the same grab as the left image: the same stamp
+    for s in others[:-2]:                     # zed_right (zed_depth): the same grab as the left: the same stamp
         ts = tc[s][order[s]]
         j = _nearest(ts, ref + off[s])
         r = ts[j] - (ref + off[s])
@@ -112,7 +115,7 @@ def plan(rec: Recording, rig, *, rate_hz: float, tolerance_ms: float, ffc_margin
     status = {cam: sorted(rec.status.get(cam) or []) for cam in THERMAL}
     pairs = []
     for s, i in sorted(chosen.items()):
-        frames = {"zed_left": i} | {c: int(match[c][i]) for c in OTHERS}
+        frames = {"zed_left": i} | {c: int(match[c][i]) for c in others}
         fr = {c: {"stamp_ns": int(rec.streams[c].stamp_ns[j]), "log_ns": int(rec.streams[c].log_ns[j]),
                   "file": int(rec.streams[c].file_index[j])} for c, j in frames.items()}
         fs, since = {}, {}
@@ -122,7 +125,7 @@ def plan(rec: Recording, rig, *, rate_hz: float, tolerance_ms: float, ffc_margin
             fs[cam] = prior[-1] if prior else -1
             ended = [e["end_ns"] for e in periods[cam] if e["end_ns"] <= t]
             since[cam] = (t - max(ended)) / 1e9 if ended else None
-        pairs.append(Pair(s, fr, {c: float(resid[c][i]) for c in OTHERS},
+        pairs.append(Pair(s, fr, {c: float(resid[c][i]) for c in others},
                           {cam: bool(in_ffc[cam][i]) for cam in THERMAL}, fs, since))
     counts = {"zed_left_frames": int(len(ref)), "complete": int(ok.sum()),
               "ffc_dropped": int((ok & ~valid).sum()), "sampled": len(pairs)}

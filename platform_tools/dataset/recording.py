@@ -340,7 +340,7 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
                         a[:, 3].astype(bool) if s.startswith("thermal") else None)
     rec = Recording(name, Path(path), files, out, status, status_source=source, recovered=notes,
                     layout=lay.name, camera_info=infos)
-    rec._topics = {s: topics[s] for s in streams if s in topics}
+    rec._topics = dict(topics)          # every topic of the layout (streams, status, camera_info)
     return rec
 
 

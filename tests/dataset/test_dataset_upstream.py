@@ -122,10 +122,10 @@ def test_calibration_option_overrides_camera_info(upstream, capsys, rig, tmp_pat
 @pytest.mark.slow
 def test_export_without_depth_is_refused_in_one_line(upstream, capsys, tmp_path):
     bag, _ = upstream
-    code, out, err = run(capsys, "export", str(bag), "--out", str(tmp_path / "ds"), *LIMITS)
+    code, out, err = run(capsys, "export", str(bag), "--out", str(tmp_path / "ds"), *LIMITS, "--depth", "recorded")
     assert code == 2 and len(err.strip().splitlines()) == 1, err
     assert str(bag) in err and "no zed_depth" in err and "tartanrgbt layout" in err, err
-    assert "needs the ZED depth" in err and "--topics" in err and "stereo" in err, err
+    assert "needs the ZED depth" in err and "--topics" in err and "--depth stereo" in err, err
     assert not (tmp_path / "ds").exists()
 
 
@@ -164,7 +164,7 @@ def test_topic_map_with_depth_exports_with_camera_info(tmp_path, capsys):
     code, out, err = run(capsys, "export", str(tmp_path / "bag"), "--out", str(tmp_path / "ds"), "--rate", "30",
                          "--topics", str(tmap), *LIMITS)
     assert code == 0, err
-    assert f"layout {tmap}; calibration: camera_info (zed_left, thermal_left, thermal_right" in out
+    assert f"layout {tmap}; depth recorded; calibration: camera_info (zed_left, thermal_left, thermal_right" in out
     manifest = json.loads((tmp_path / "ds" / "export.json").read_text())
     assert manifest["recordings"][0]["layout"] == str(tmap)
     m = manifest["calibration_models"]["cameras"]["thermal_left_optical"]
