@@ -247,6 +247,8 @@ def _made_parts(asm, made_nodes: dict[str, list]) -> list[PrintedPart]:
 
 def _price(cat: LoadedCatalogue, e: CatalogueEntry) -> tuple[float, str]:
     """One pack's price in the base currency, and the note that says where it comes from."""
+    if e.price is None:
+        return 0.0, f"fitted to {e.included_with}: priced on its line"
     amount = e.price.amount
     if e.price.currency != cat.catalogue.base_currency:
         amount *= cat.catalogue.exchange_rates[e.price.currency]
@@ -283,7 +285,7 @@ def _placed_line(rig, cat: LoadedCatalogue, key: str, nodes: list, made: list[Pr
                 supplier=e.supplier, link=e.link.format(**fmt), quantity=qty, unit="pcs", pack_size=e.pack_size,
                 packs=packs, pack_price=pack_price, price_note=note, cost=packs * pack_price, unit_mass_g=unit_mass,
                 mass_g=unit_mass * qty, mass_source=mass_src, source="CAD assembly", nodes=[x.name for x in nodes],
-                thread=thread, length_mm=length, estimate=e.price.confidence.value == "estimate")
+                thread=thread, length_mm=length, estimate=e.price is not None and e.price.confidence.value == "estimate")
 
 
 def _printed_line(mp: PrintedPart, filament_id: str, density_g_cm3: float) -> Line:
@@ -314,7 +316,7 @@ def _supply_line(cat: LoadedCatalogue, pid: str, e: CatalogueEntry, printed_mass
                 part_number=s.part_number, supplier=e.supplier, link=e.link, quantity=qty_shown, unit=s.unit,
                 pack_size=e.pack_size, packs=packs, pack_price=pack_price, price_note=note, cost=packs * pack_price,
                 unit_mass_g=unit_mass, mass_g=mass, mass_source=msrc, source=src, nodes=[],
-                estimate=e.price.confidence.value == "estimate")
+                estimate=e.price is not None and e.price.confidence.value == "estimate")
 
 
 def _printer_summary(printer) -> dict:

@@ -41,6 +41,8 @@ class LoadedCatalogue:
 
     def unit_price(self, entry: CatalogueEntry) -> float:
         """Price of one unit in the base currency."""
+        if entry.price is None:
+            return 0.0
         rate = 1.0 if entry.price.currency == self.catalogue.base_currency else \
             self.catalogue.exchange_rates[entry.price.currency]
         return entry.price.amount * rate / entry.pack_size
@@ -60,7 +62,17 @@ def _rules(cat: Catalogue, rig: Rig) -> Iterator[Problem]:
     seen_numbers: dict[str, str] = {}
     for pid, e in cat.parts.items():
         path = ("parts", pid)
-        if e.price.currency != cat.base_currency and e.price.currency not in cat.exchange_rates:
+        if e.included_with is not None:
+            if e.included_with not in cat.parts or e.included_with == pid:
+                yield Problem(path + ("included_with",), f"is {e.included_with!r}, which is not another entry of the "
+                                                         "catalogue")
+            if e.price is not None:
+                yield Problem(path + ("price",), f"comes fitted to {e.included_with} (included_with), which is priced "
+                                                 "with it; remove the price")
+        elif e.price is None:
+            yield Problem(path + ("price",), "is missing; give amount, currency, checked and confidence (or "
+                                             "included_with for a part sold fitted to another)")
+        if e.price is not None and e.price.currency != cat.base_currency and e.price.currency not in cat.exchange_rates:
             yield Problem(path + ("price", "currency"),
                           f"is {e.price.currency}, which has no rate in exchange_rates (base {cat.base_currency})")
         if not e.link.startswith(("https://", "http://")):

@@ -88,7 +88,10 @@ class CatalogueEntry:
     category: Category
     supplier: str
     link: str
-    price: Price
+    #: omitted only for a part that comes fitted to another (``included_with``)
+    price: Optional[Price] = None
+    #: the catalogue id of the part this one comes fitted to (the lens on its Boson core): no price of its own
+    included_with: Optional[str] = None
     #: per-unit price applies to this many units (a bag of 100 screws: pack_size 100)
     pack_size: Annotated[int, Gt(0)] = 1
     #: False for parts the CAD model does not place; they must then declare `supply`

@@ -395,8 +395,18 @@ def check_assembly_order(asm: Assembly, steps=None, extra=()) -> CheckResult:
                        r.problems + r.details, r.data)
 
 
+def check_electrical(asm: Assembly) -> CheckResult:
+    """Power path and sync trigger (cad.electrical): switch, fuse and converter ratings against the current
+    computed from the placed parts' power, the trigger level against the Boson's sync input, the LED's voltage."""
+    from .electrical import electrical_checks, power_counts
+    res = electrical_checks(asm.rig, power_counts(asm))
+    bad = [f"{r.name}: {r.text}" for r in res if not r.ok]
+    return CheckResult("electrical", not bad, "switch, fuse, converter, sync level and LED fit the power budget"
+                       if not bad else f"{len(bad)} electrical problem(s)", bad + [f"{r.name}: {r.text}" for r in res if r.ok])
+
+
 CHECKS = [check_valid, check_interference, check_min_wall, check_clearances, check_bed, check_printable, check_fov,
-          check_battery, check_vents, check_assembly_order, check_mass, check_estimates]
+          check_battery, check_vents, check_assembly_order, check_mass, check_electrical, check_estimates]
 
 
 def run_checks(asm: Assembly) -> list[CheckResult]:

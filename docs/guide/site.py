@@ -22,8 +22,10 @@ def write_site(asm, bom: Bom, guide: Guide, stage: Path) -> list[Path]:
     img = stage / "img"
     files += pictures.render_steps(asm, guide.steps, img)
     files += pictures.render_overview(asm, img)
-    blocks, wires, checks = wiring.wiring(rig)
-    (stage / "wiring.svg").write_text(wiring.svg(rig))
+    from cad.electrical import power_counts
+    counts = power_counts(asm)
+    blocks, wires, checks = wiring.wiring(rig, counts)
+    (stage / "wiring.svg").write_text(wiring.svg(rig, counts))
     files.append(stage / "wiring.svg")
     printed = [p for p in bom.made if p.category == "printed"]
     fil = next(ln for ln in bom.lines if ln.source == "printed volumes")

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from html import escape
 
 from cad.bought.base import part_of_kind
+from cad.electrical import budget, electrical_checks
 
 #: Jetson 40-pin header (NVIDIA AGX Orin devkit pinout, same layout as a Raspberry Pi header)
 HEADER_5V_PIN, HEADER_GND_PIN = 2, 6
@@ -55,7 +56,9 @@ def _v(r) -> str:
     return f"{r.min:g} V" if r.min == r.max else f"{r.min:g}-{r.max:g} V"
 
 
-def wiring(rig) -> tuple[list[Block], list[Wire], list[Check]]:
+def wiring(rig, counts) -> tuple[list[Block], list[Wire], list[Check]]:
+    """Blocks, wires and electrical checks; ``counts`` (part id -> how many, cad.electrical.power_counts)
+    gives the power budget the switch and fuse are checked against."""
     d = rig.desc
     P = rig.part
     s, b = d.sync, d.recording.button
@@ -64,11 +67,18 @@ def wiring(rig) -> tuple[list[Block], list[Wire], list[Check]]:
 
     bat, conv, orin, fan = K("battery"), K("converter"), K("computer"), K("fan")
     src, boson = P(s.source_part), P(d.sensors.thermal.part)
+    bud = budget(rig, counts)
+    fuse, switch = K("fuse"), K("switch")
+    sync_in = boson.sync_input_v
+    sync_rng = f"{sync_in.min.value:g}-{sync_in.max.value:g} V" if sync_in is not None else "range not given"
     blocks = [
-        Block("battery", 30, 40, 230, 70, bat.vendor + " " + bat.part_number, [f"out {_v(bat.output_v)}"]),
-        Block("fuse", 30, 160, 230, 60, "fuse", [K("fuse").part_number]),
-        Block("switch", 30, 270, 230, 60, "power switch", [K("switch").part_number.split(" (")[0]]),
-        Block("converter", 30, 380, 230, 70, "DC-DC converter", [f"in {_v(conv.supply_v)}, out {_v(conv.output_v)}"]),
+        Block("battery", 30, 30, 230, 54, bat.vendor + " " + bat.part_number + " on " + K("battery_adapter").part_number,
+              [f"out {_v(bat.output_v)}, cut-off {bud.cutoff_v:g} V"]),
+        Block("gland", 30, 110, 230, 40, "cable gland, strain relief (floor)", []),
+        Block("fuse", 30, 175, 230, 54, f"fuse {fuse.rating_a.value if fuse.rating_a else '?'} A", [fuse.part_number]),
+        Block("switch", 30, 255, 230, 54, "power switch (DC rated)", [switch.part_number.split(",")[0]]),
+        Block("cutoff", 30, 335, 230, 40, f"under-voltage cut-off at {bud.cutoff_v:g} V", []),
+        Block("converter", 30, 400, 230, 54, "DC-DC converter", [f"in {_v(conv.supply_v)}, out {_v(conv.output_v)}"]),
         Block("card", 370, 40, 300, 90, f"{src.part_number} (capture card)",
               ["GMSL2 camera ports", f"{s.connector}: trigger out, pin {s.signal_pin} signal, pin {s.ground_pin} GND"]),
         Block("orin", 370, 200, 300, 290, "Jetson AGX Orin devkit",
@@ -78,21 +88,23 @@ def wiring(rig) -> tuple[list[Block], list[Wire], list[Check]]:
                f"  pin {b.led_pin} button LED",
                f"  pin {HEADER_5V_PIN} 5 V, pin {HEADER_GND_PIN} GND (fans)"]),
         Block("zed", 790, 40, 230, 70, "ZED X", ["GMSL2 (Fakra)"]),
-        Block("boson_left", 790, 170, 230, 70, "Boson 640 left", ["USB-C, external sync in"]),
-        Block("boson_right", 790, 290, 230, 70, "Boson 640 right", ["USB-C, external sync in"]),
+        Block("boson_left", 790, 170, 230, 70, "Boson 640 left", ["USB-C; interface board", f"EXT_SYNC in {sync_rng}"]),
+        Block("boson_right", 790, 290, 230, 70, "Boson 640 right", ["USB-C; interface board", f"EXT_SYNC in {sync_rng}"]),
         Block("fans", 790, 410, 230, 70, f"2 x {fan.part_number}", [f"{_v(fan.supply_v)}"]),
         Block("button", 370, 560, 300, 70, "record button with LED", [K("button").part_number]),
         Block("wifi", 30, 540, 230, 60, "2 x Wi-Fi antenna", ["RP-SMA bulkheads, u.fl pigtails"]),
         Block("ssd", 30, 640, 230, 50, "NVMe SSD", ["recordings (" + d.recording.data_mount + ")"]),
     ]
     wires = [
-        Wire("power", "battery", "fuse", f"+ {_v(bat.output_v)}", [(145, 110), (145, 160)]),
-        Wire("power", "fuse", "switch", "fused +", [(145, 220), (145, 270)]),
-        Wire("power", "switch", "converter", "switched +", [(145, 330), (145, 380)]),
-        Wire("power", "converter", "orin", f"{_v(conv.output_v)} to DC jack", [(260, 415), (315, 415), (315, 230), (370, 230)],
-             label_at=(266, 442)),
-        Wire("ground", "battery", "converter", "battery - (common ground)", [(30, 95), (15, 95), (15, 440), (30, 440)],
-             label_at=(20, 468)),
+        Wire("power", "battery", "gland", f"+ {_v(bat.output_v)}, {bud.battery_a:.1f} A max", [(145, 84), (145, 110)]),
+        Wire("power", "gland", "fuse", "", [(145, 150), (145, 175)]),
+        Wire("power", "fuse", "switch", "fused +", [(145, 229), (145, 255)]),
+        Wire("power", "switch", "cutoff", "switched +", [(145, 309), (145, 335)]),
+        Wire("power", "cutoff", "converter", "", [(145, 375), (145, 400)]),
+        Wire("power", "converter", "orin", f"{_v(conv.output_v)} to DC jack", [(260, 427), (315, 427), (315, 230), (370, 230)],
+             label_at=(266, 470)),
+        Wire("ground", "battery", "converter", "battery - (common ground)", [(30, 70), (15, 70), (15, 440), (30, 440)],
+             label_at=(20, 490)),
         Wire("power", "orin", "fans", f"5 V pin {HEADER_5V_PIN} / GND pin {HEADER_GND_PIN}", [(670, 445), (790, 445)]),
         Wire("data", "zed", "card", "GMSL2", [(790, 75), (670, 75)]),
         Wire("data", "card", "orin", "camera connector", [(520, 130), (520, 200)]),
@@ -107,7 +119,7 @@ def wiring(rig) -> tuple[list[Block], list[Wire], list[Check]]:
         Wire("data", "wifi", "orin", "u.fl", [(260, 570), (340, 570), (340, 470), (370, 470)]),
         Wire("data", "ssd", "orin", "M.2", [(260, 665), (350, 665), (350, 480), (370, 480)]),
     ]
-    checks = [_sync_level_check(s, d.sensors.thermal.part, boson),
+    checks = [Check(r.ok, r.text) for r in electrical_checks(rig, counts)] + [
         Check(bat.output_v.max <= conv.supply_v.max and bat.output_v.min >= conv.supply_v.min,
               f"battery {_v(bat.output_v)} within the converter's input {_v(conv.supply_v)}"),
         Check(orin.supply_v.min <= conv.output_v.min and conv.output_v.max <= orin.supply_v.max,
@@ -119,24 +131,13 @@ def wiring(rig) -> tuple[list[Block], list[Wire], list[Check]]:
     return blocks, wires, checks
 
 
-def _sync_level_check(s, boson_id: str, boson) -> Check:
-    """The trigger level against the Boson's external-sync input range (parts.<boson>.sync_input_v)."""
-    r = boson.sync_input_v
-    if r is None:
-        return Check(False, f"sync level {s.level_v:g} V (sync.level_v): parts.{boson_id}.sync_input_v is not "
-                            "given, so it cannot be checked against the Boson's external-sync input")
-    lo, hi = r.min.value, r.max.value
-    return Check(lo <= s.level_v <= hi, f"sync level {s.level_v:g} V (sync.level_v) within the Boson's external-sync "
-                                        f"input range {lo:g}-{hi:g} V")
-
-
 def _fit(text: str, width: float, px_per_char: float = 6.3) -> str:
     n = int(width / px_per_char)
     return text if len(text) <= n else text[:n - 1].rstrip(" ,") + "…"
 
 
-def svg(rig) -> str:
-    blocks, wires, _ = wiring(rig)
+def svg(rig, counts) -> str:
+    blocks, wires, _ = wiring(rig, counts)
     W, H = 1050, 760
     out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" '
            'font-family="DejaVu Sans, sans-serif" font-size="12">',

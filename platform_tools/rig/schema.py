@@ -141,6 +141,14 @@ class Part:
     max_frame_rate_hz: Optional[Annotated[Sourced, Unit("Hz"), Gt(0)]] = None
     #: a camera's external-sync input: the trigger pulse levels it accepts, with their source
     sync_input_v: Optional[SourcedVoltRange] = None
+    #: a switch's or fuse's DC current rating, a converter's output current rating, with its source
+    rating_a: Optional[Annotated[Sourced, Unit("A"), Gt(0)]] = None
+    #: the DC voltage a switch or fuse is rated to break, with its source
+    rating_dc_v: Optional[Annotated[Sourced, Unit("V"), Gt(0)]] = None
+    #: a converter's efficiency (0-1), with its source
+    efficiency: Optional[Annotated[Sourced, Gt(0), Le(1)]] = None
+    #: a battery's discharge cut-off: the load must stop at this voltage (a Makita pack relies on the tool)
+    cutoff_v: Optional[Annotated[Sourced, Unit("V"), Gt(0)]] = None
 
 
 # ----------------------------------------------------------------------------- cameras

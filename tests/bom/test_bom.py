@@ -103,6 +103,10 @@ def _written_filament(d):
     (lambda d: d["parts"].pop("heat_sink"), "parts.heat_sink: missing"),
     (_unused, "parts.heat_sink_spare: used nowhere"),
     (_written_filament, "parts.petg_filament.supply.quantity: is 1000, but quantity_from: printed_parts computes it"),
+    (lambda d: d["parts"]["boson_lens_4p9mm"].update(price=dict(amount=350, currency="USD", checked="2026-11-01",
+                                                                confidence="estimate")),
+     "parts.boson_lens_4p9mm.price: comes fitted to boson_640 (included_with)"),
+    (lambda d: d["parts"]["boson_lens_4p9mm"].pop("included_with"), "parts.boson_lens_4p9mm.price: is missing"),
 ])
 def test_bad_catalogue(tmp_path, capsys, edit, expected):
     bad = _catalogue(tmp_path, edit)
@@ -128,3 +132,13 @@ def test_bad_catalogue_names_the_line(tmp_path, capsys):
     line = next(i for i, ln in enumerate(text.splitlines(), 1) if "XYZ" in ln)
     assert code == 2 and f"{bad}:{line}: parts.zed_x.price.currency: got 'XYZ'" in err, err
     assert not (tmp_path / "out").exists()
+
+
+def test_power_and_sync_lines(bom_default):
+    rows = read_bom(bom_default)
+    lens = rows["boson_lens_4p9mm"]
+    assert float(lens["cost"]) == 0 and "fitted to boson_640" in lens["price_note"]
+    for key in ("makita_charger", "undervoltage_cutoff", "cable_gland", "wifi_pigtail", "fuse_holder_fixings",
+                "capture_card_fixings", "power_splices", "boson_sync_breakout"):
+        assert float(rows[key]["quantity"]) > 0, key
+    assert float(rows["wifi_pigtail"]["quantity"]) == float(rows["wifi_antenna"]["quantity"])

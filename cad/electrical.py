@@ -1,0 +1,141 @@
+"""The rig's electrical design, computed from the parts: power budget, battery current, fuse size, and the
+checks that the switch, fuse, converter and sync trigger fit it.
+
+Every number is read from the rig description (each part's ``power_w``, ``supply_v``, ``output_v``,
+``rating_a``, ``rating_dc_v``, ``efficiency``, ``cutoff_v``, ``sync_input_v`` and ``sync.level_v``); the
+only constants here are engineering rules (fuse margin, the ATO value series, the Jetson header's 3.3 V
+logic), named below. The battery current is taken at the pack's cut-off voltage: the lowest voltage the
+load sees, so the highest current for the same power.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping
+
+from cad.bought.base import part_of_kind
+
+#: a fuse carries its rated current indefinitely: size it this much above the continuous load
+FUSE_MARGIN = 1.25
+#: ATO / ATC blade fuse values (A), the standard series
+ATO_VALUES_A = (1, 2, 3, 5, 7.5, 10, 15, 20, 25, 30, 35, 40)
+#: the Jetson AGX Orin devkit's 40-pin header GPIOs are 3.3 V logic (NVIDIA devkit carrier board spec)
+GPIO_V = 3.3
+
+
+@dataclass(frozen=True)
+class Result:
+    name: str
+    ok: bool
+    text: str
+
+
+@dataclass(frozen=True)
+class Budget:
+    loads_w: Mapping[str, tuple[int, float]]   # part id -> (count, watts each)
+    load_w: float            # at the converter's output
+    battery_w: float         # drawn from the battery (load / efficiency)
+    cutoff_v: float
+    max_v: float
+    battery_a: float         # at the cut-off voltage: the worst case
+    battery_a_full: float    # at the pack's full voltage
+    converter_a: float       # at the converter's output voltage
+    fuse_a: float            # the smallest ATO value above FUSE_MARGIN x battery_a
+
+
+def power_counts(asm) -> dict[str, int]:
+    """How many of each powered part the CAD assembly places."""
+    counts: dict[str, int] = {}
+    for n in asm.nodes:
+        if n.category == "bought" and n.part_id in asm.rig.desc.parts and asm.rig.part(n.part_id).power_w is not None:
+            counts[n.part_id] = counts.get(n.part_id, 0) + 1
+    return counts
+
+
+def budget(rig, counts: Mapping[str, int]) -> Budget:
+    """The power budget of ``counts`` (part id -> how many) on the rig's battery and converter."""
+    bat, conv = rig.part(part_of_kind(rig, "battery")), rig.part(part_of_kind(rig, "converter"))
+    loads = {pid: (k, rig.part(pid).power_w.value) for pid, k in counts.items()
+             if k and rig.part(pid).power_w is not None}
+    load = sum(k * w for k, w in loads.values())
+    eff = conv.efficiency.value if conv.efficiency is not None else 1.0
+    cutoff = bat.cutoff_v.value if bat.cutoff_v is not None else bat.output_v.min
+    battery_w = load / eff
+    amps = battery_w / cutoff
+    fuse = next((v for v in ATO_VALUES_A if v >= FUSE_MARGIN * amps), math.inf)
+    return Budget(loads_w=loads, load_w=load, battery_w=battery_w, cutoff_v=cutoff, max_v=bat.output_v.max,
+                  battery_a=amps, battery_a_full=battery_w / bat.output_v.max,
+                  converter_a=load / conv.output_v.max, fuse_a=fuse)
+
+
+def _rated(part, pid: str, what: str) -> tuple[float | None, float | None, str]:
+    a = part.rating_a.value if part.rating_a is not None else None
+    v = part.rating_dc_v.value if part.rating_dc_v is not None else None
+    missing = [k for k, x in (("rating_a", a), ("rating_dc_v", v)) if x is None]
+    return a, v, (f"parts.{pid}.{' and '.join(missing)} not given: the {what} cannot be checked" if missing else "")
+
+
+def power_checks(rig, counts: Mapping[str, int]) -> list[Result]:
+    """The switch and fuse against the computed battery current, the converter against its output current."""
+    b = budget(rig, counts)
+    sw_id, fu_id, cv_id = (part_of_kind(rig, k) for k in ("switch", "fuse", "converter"))
+    out = [Result("power budget", True,
+                  f"loads {b.load_w:.1f} W (" + ", ".join(f"{k} x {pid} {w:g} W" for pid, (k, w) in b.loads_w.items())
+                  + f"), {b.battery_w:.1f} W from the battery: {b.battery_a:.2f} A at the {b.cutoff_v:g} V cut-off, "
+                  f"{b.battery_a_full:.2f} A at {b.max_v:g} V; fuse {b.fuse_a:g} A (>= {FUSE_MARGIN:g} x "
+                  f"{b.battery_a:.2f} A)")]
+    sa, sv, miss = _rated(rig.part(sw_id), sw_id, "switch")
+    if miss:
+        out.append(Result("switch rating", False, miss))
+    else:
+        ok = sa >= b.fuse_a and sv >= b.max_v
+        out.append(Result("switch rating", ok, f"switch {sw_id} rated {sa:g} A at {sv:g} V DC "
+                          + ("covers" if ok else "does not cover")
+                          + f" the fuse's {b.fuse_a:g} A (load {b.battery_a:.2f} A) at up to {b.max_v:g} V"))
+    fa, fv, miss = _rated(rig.part(fu_id), fu_id, "fuse")
+    if miss:
+        out.append(Result("fuse rating", False, miss))
+    else:
+        ok = FUSE_MARGIN * b.battery_a <= fa and fv >= b.max_v and (sa is None or fa <= sa)
+        out.append(Result("fuse rating", ok, f"fuse {fu_id} {fa:g} A, {fv:g} V DC: "
+                          + ("" if ok else "NOT ")
+                          + f"between {FUSE_MARGIN:g} x the {b.battery_a:.2f} A load and the switch's rating, "
+                            f"rated for {b.max_v:g} V"))
+    conv = rig.part(cv_id)
+    ca = conv.rating_a.value if conv.rating_a is not None else None
+    out.append(Result("converter rating", ca is not None and ca >= b.converter_a,
+                      f"converter {cv_id} output {ca if ca is not None else '(rating_a not given)'} A for "
+                      f"{b.converter_a:.2f} A at {conv.output_v.max:g} V"))
+    bat = rig.part(part_of_kind(rig, "battery"))
+    out.append(Result("under-voltage cut-off", conv.supply_v.min <= b.cutoff_v <= bat.output_v.max,
+                      f"cut-off at {b.cutoff_v:g} V (parts.{part_of_kind(rig, 'battery')}.cutoff_v), inside the "
+                      f"converter's input {conv.supply_v.min:g}-{conv.supply_v.max:g} V"))
+    return out
+
+
+def sync_check(rig) -> Result:
+    """The capture card's trigger level (sync.level_v) inside the Boson's external-sync input range."""
+    s, boson_id = rig.desc.sync, rig.desc.sensors.thermal.part
+    r = rig.part(boson_id).sync_input_v
+    if r is None:
+        return Result("sync level", False, f"sync level {s.level_v:g} V (sync.level_v): parts.{boson_id}.sync_input_v "
+                                           "is not given, so it cannot be checked against the Boson's external-sync input")
+    lo, hi = r.min.value, r.max.value
+    ok = lo <= s.level_v <= hi
+    return Result("sync level", ok, f"sync level {s.level_v:g} V (sync.level_v) {'within' if ok else 'OUTSIDE'} the "
+                                    f"Boson's external-sync input range {lo:g}-{hi:g} V ({r.min.source}, "
+                                    f"{r.min.confidence.value})")
+
+
+def led_check(rig) -> Result:
+    """The record button's LED driven straight from a GPIO: its voltage must include the header's 3.3 V."""
+    pid = part_of_kind(rig, "button")
+    r = rig.part(pid).supply_v
+    ok = r is not None and r.min <= GPIO_V <= r.max
+    rng = f"{r.min:g}-{r.max:g} V" if r is not None else "(supply_v not given)"
+    return Result("button LED voltage", ok, f"LED of {pid} {rng} {'takes' if ok else 'does NOT take'} the "
+                                            f"{GPIO_V:g} V GPIO")
+
+
+def electrical_checks(rig, counts: Mapping[str, int]) -> list[Result]:
+    return power_checks(rig, counts) + [sync_check(rig), led_check(rig)]
