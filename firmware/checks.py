@@ -15,7 +15,7 @@ import yaml
 
 from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
 from platform_tools.rig import Rig
-from firmware import budget, privilege
+from firmware import budget, privilege, v4l2
 from firmware.context import L4T_RELEASES, build_context
 from firmware.launch_stub import ExecuteProcess, Node, load_launch_file
 
@@ -106,7 +106,7 @@ def _params_file(folder: Path, path: str) -> Path:
 
 def check_params(folder: Path) -> Check:
     bad = []
-    files = sorted((folder / "config").glob("*.yaml"))
+    files = sorted(f for f in (folder / "config").glob("*.yaml") if not f.name.endswith("_camera_info.yaml"))
     for f in files:
         if f.name == "rig.yaml":
             continue
@@ -351,4 +351,5 @@ def run_checks(folder: Path, rig: Rig) -> list[Check]:
     return [check_compose_valid(folder), check_compose_matches_rig(folder, rig), check_shellcheck(folder),
             check_params(folder), check_launch(folder, rig), check_unit(folder, rig), check_udev(folder, rig),
             check_dockerfiles(folder, rig), *privilege.run(folder, rig), budget.check_budget(folder, rig),
-            budget.check_chunk_crcs(rig)]
+            budget.check_chunk_crcs(rig),
+            v4l2.check_controls(folder, rig, [t["name"] for t in build_context(rig)["thermal"]])]

@@ -11,6 +11,7 @@ from dataclasses import dataclass, fields
 
 from platform_tools.boson.discovery import USB_PID, USB_VID
 from platform_tools.rig import Rig
+from firmware import camerainfo, v4l2
 
 #: frames the ZED wrapper does not publish: the thermal cameras, posed from the ZED X centre
 THERMAL_FRAMES = ("thermal_left", "thermal_left_optical", "thermal_right", "thermal_right_optical")
@@ -120,6 +121,10 @@ def thermal_context(rig: Rig, side: str) -> dict:
         "topic": getattr(od.topics, f"thermal_{side}"),
         "status_topic": getattr(od.topics, f"thermal_{side}_status"),
         "telemetry_rows": od.thermal_telemetry_rows,
+        # usb_cam's control parameters, each explicit: nothing written unless the rig asks (firmware/v4l2.py)
+        "controls": v4l2.rendered_params(rig),
+        "camera_info_url": camerainfo.url(side),
+        "camera_info_file": camerainfo.file_name(side),
     }
 
 
@@ -214,6 +219,8 @@ def build_context(rig: Rig) -> dict:
             "depth_openni": od.zed_depth_openni,
         },
         "thermal": [thermal_context(rig, "left"), thermal_context(rig, "right")],
+        "v4l2_allow": sorted(v4l2.allowed_v4l2(rig)),
+        "v4l2_guard": {"file": v4l2.GUARD_FILE, "mount": v4l2.GUARD_MOUNT},
         "boson_vid": vid,
         "boson_pid": pid,
         "topics": [getattr(od.topics, f.name) for f in fields(od.topics)],

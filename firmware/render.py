@@ -1,6 +1,7 @@
 """Render firmware/templates with the rig description into a folder ready to install on the Orin.
 
-`render(rig)` returns every file as text (pure: no I/O but reading the templates); `write(rig, out)`
+`render(rig)` returns every file as text (pure: no I/O but reading the templates and the thermal
+calibration's camera_info files the rig names); `write(rig, out)`
 stages them and swaps the folder in whole, so a failed render never leaves half a configuration.
 """
 from __future__ import annotations
@@ -17,6 +18,7 @@ import yaml
 
 from platform_tools.rig import atomic
 from platform_tools.rig import Rig
+from firmware import camerainfo
 from firmware.context import build_context
 
 REPO = Path(__file__).resolve().parents[1]
@@ -77,6 +79,8 @@ def render(rig: Rig) -> list[Output]:
     ]
     for t in ctx["thermal"]:
         outputs.append(Output(f"config/{t['name']}.yaml", tpl("config/thermal.yaml.j2", t=t)))
+        outputs.append(Output(f"config/{t['camera_info_file']}", camerainfo.render(rig, t["side"])[0]))
+    outputs.append(Output(ctx["v4l2_guard"]["file"], tpl("bin/v4l2-ctl.j2"), executable=True))
     for script in ("rig-up.sh", "rig-down.sh", "ros-entry.sh", "install.sh"):
         outputs.append(Output(f"bin/{script}", tpl(f"bin/{script}.j2"), executable=True))
     images = ctx["images"]

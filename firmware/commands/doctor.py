@@ -7,8 +7,12 @@ import signal
 import threading
 from pathlib import Path
 
+import json
+
+from firmware.device import bringup
 from firmware.device.preflight import Report, run_preflight
-from platform_tools.rig.conventions import (CheckFailed, add_output_options, add_rig_options, print_json,
+from platform_tools.rig import atomic
+from platform_tools.rig.conventions import (CheckFailed, UserError, add_output_options, add_rig_options, print_json,
     rig_from_args)
 
 
@@ -28,10 +32,20 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "is on the data drive (not the eMMC), enough free space, both Bosons present "
                                    "and answering with the expected serial numbers, their frame counters "
                                    "advancing at the trigger rate, their sync mode as configured.",
-                       epilog="Exit 0 when every check passes (or is skipped), 1 when one fails.")
+                       epilog="Exit 0 when every check passes (or is skipped), 1 when one fails, 2 on bad input.")
     add_rig_options(p)
     add_output_options(p)
     add_preflight_options(p)
+    g = p.add_argument_group("bring-up (the first boot of a rig: docs/on-device.md)")
+    g.add_argument("--bring-up", action="store_true",
+                   help="also check what this project could only assume (USB serials, telemetry layout, trigger, "
+                        "ZED SDK / L4T, GPIO pinmux, recorded rate, host clock) and write a report")
+    g.add_argument("--root", metavar="DIR", type=Path, default=Path("/"),
+                   help="where /etc and /sys are read from (default /)")
+    g.add_argument("--frames", metavar="DIR", type=Path,
+                   help="folder with left.raw / right.raw: one Y16 frame of each Boson, telemetry rows included")
+    g.add_argument("--report-dir", metavar="DIR", type=Path, default=Path("."),
+                   help="where bringup-report.json and bringup-report.md go (default: the current folder)")
     p.add_argument("--every", metavar="S", type=float,
                    help="repeat every S seconds until stopped, printing when the result changes")
     p.set_defaults(handler=cmd_doctor)
@@ -43,11 +57,23 @@ def _table(report: Report) -> str:
 
 
 def _once(args, rig) -> Report:
-    return run_preflight(rig, args.output_dir, boson=not args.no_boson, dev_dir=args.dev_dir)
+    report = run_preflight(rig, args.output_dir, boson=not args.no_boson, dev_dir=args.dev_dir)
+    if getattr(args, "bring_up", False):
+        out = Path(args.output_dir or rig.desc.recording.output_dir)
+        report.checks += bringup.run(rig, report.cameras, root=args.root, output_dir=out, frames_dir=args.frames,
+                                     boson=not args.no_boson)
+        atomic.write_text(args.report_dir / "bringup-report.json",
+                          json.dumps(report.to_dict() | {"rig": rig.desc.name, "rig_hash": rig.hash}, indent=2,
+                                     default=str) + "\n")
+        atomic.write_text(args.report_dir / "bringup-report.md",
+                          bringup.report_markdown(rig, report.checks, report.cameras))
+    return report
 
 
 def cmd_doctor(args: argparse.Namespace) -> int:
     rig = rig_from_args(args)
+    if args.every and args.bring_up:
+        raise UserError("--every and --bring-up: the bring-up report is written once; use one of them")
     if args.every:
         return _watch(args, rig)
     report = _once(args, rig)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, field
-from typing import Annotated, Literal, Mapping, Optional
+from typing import Annotated, Literal, Mapping, Optional, Union
 
 from .typed import Ge, Gt, Le, Lt, Unit
 
@@ -465,6 +465,13 @@ class OnDevice:
     zed_depth_openni: bool
     #: Boson telemetry rows appended to each frame (640x512 becomes 640x514)
     thermal_telemetry_rows: Annotated[int, Ge(0)]
+    #: usb_cam V4L2 parameters to write to the Bosons (e.g. brightness: 50): none by default, so the
+    #: driver leaves the cameras as `boson-config` set them (firmware/v4l2.py, docs/on-device.md)
+    thermal_v4l2_controls: Mapping[str, Union[bool, int]]
+    #: ROS camera_info YAML of each Boson from the thermal calibration (relative to the rig file);
+    #: null: the nominal model is published as camera_info (firmware/camerainfo.py)
+    thermal_camera_info_left: Optional[str]
+    thermal_camera_info_right: Optional[str]
     gpio_chips: tuple[str, ...]
     #: the button pulls the pin to ground when pressed
     button_active_low: bool
