@@ -12,7 +12,9 @@
    more than 45 deg from upright is reported turned (a rigid symmetry of the corner grid).
 4. A board cut by the image edge or occluded: its offset on the board is anchored by a visible
    board edge (square centres past the last corner line stop alternating); if neither end of an
-   axis is seen, the offset is ambiguous and the view is dropped rather than guessed.
+   axis is seen, the offset is ambiguous and the view is dropped rather than guessed; so is it
+   when both ends look like the board's edge (one is not: a hand over the squares past a line
+   looks as plain as the border).
 """
 from __future__ import annotations
 
@@ -337,6 +339,13 @@ def anchor(g: np.ndarray, xy: np.ndarray, ij: np.ndarray, W: int, H: int) -> tup
             continue
         lo = _end_state(g, pos, axis, 0, n_other)
         hi = _end_state(g, pos, axis, 1, n_other)
+        # both ends look like the board's border with corners missing: one of them is not (a hand
+        # over the squares past a line looks plain too: stereographic hard seed 11, 8x8, image 013,
+        # 17 corners labelled four columns off, up to 153 px), and nothing says which
+        name = "i (across)" if axis == 0 else "j (down)"
+        if lo.startswith("closed") and hi.startswith("closed"):
+            return None, (f"the board ends after {n_seen} corners along {name}, not {n_board}: check the board "
+                          f"size (or the board is occluded across, or a hand hides one end)")
         # a weak 'closed' (the next squares faint, not gone) counts only when the other end
         # positively goes on, or the corners missing there would lie outside the image; a faint
         # last row of squares inside the image looks the same as the board's border otherwise
@@ -352,10 +361,6 @@ def anchor(g: np.ndarray, xy: np.ndarray, ij: np.ndarray, W: int, H: int) -> tup
         if hi == "closed" and lo != "closed":
             out[:, axis] += n_board - n_seen
             continue
-        name = "i (across)" if axis == 0 else "j (down)"
-        if lo == hi == "closed":
-            return None, (f"the board ends after {n_seen} corners along {name}, not {n_board}: "
-                          f"check the board size (or the board is occluded across)")
         return None, (f"partial board: {n_seen} of {n_board} corners along {name} and neither board edge "
                       f"seen; cannot tell which corners they are")
     return out, ""
