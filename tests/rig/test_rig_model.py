@@ -12,11 +12,6 @@ from platform_tools.rig.frames import T_BODY_OPTICAL
 from platform_tools.rig import load_rig
 
 
-@pytest.fixture(scope="module")
-def rig():
-    return load_rig()
-
-
 def test_frames_follow_the_description(rig):
     d = rig.desc
     zed_b = rig.dim(d.sensors.zed_x.part, "baseline_mm")
