@@ -49,11 +49,20 @@ class Found:
         return f"{sn} at {self.port}" + (f" (no serial port: {self.source})" if self.source == "usb" else "")
 
 
+def _target(link) -> str | None:
+    """Where a udev link points now; None when it is gone (udev removes links while a camera re-enumerates,
+    also between our exists() and realpath())."""
+    try:
+        return os.path.realpath(link) if os.path.exists(link) else None
+    except OSError:
+        return None
+
+
 def _video_for(serial: int | None) -> str | None:
     if serial is None:
         return None
     link = v4l_dir() / _VIDEO_LINK.format(sn=serial)
-    return os.path.realpath(link) if link.exists() else None
+    return _target(link)
 
 
 def _from_by_id() -> list[Found]:
@@ -68,10 +77,11 @@ def _from_by_id() -> list[Found]:
         if not m:
             continue
         link = folder / name
-        if not link.exists():          # dangling: the camera is re-enumerating
+        target = _target(link)
+        if target is None:             # dangling: the camera is re-enumerating
             continue
         sn = int(m.group(1)) if m.group(1).isdigit() else None
-        out.append(Found(sn, str(link), os.path.realpath(link), _video_for(sn), "by-id"))
+        out.append(Found(sn, str(link), target, _video_for(sn), "by-id"))
     return out
 
 

@@ -106,11 +106,19 @@ class SerialTransport:
     def __exit__(self, *exc) -> None:
         self.close()
 
+    def _points_elsewhere(self) -> bool:
+        """True when the path is gone or names another device node. udev removes the by-id link while we
+        look at it, so a link that vanishes between the two system calls counts as gone, not as an error."""
+        try:
+            return not os.path.exists(self.path) or os.path.realpath(self.path) != self._device
+        except OSError:
+            return True
+
     def wait_gone(self, timeout_s: float) -> bool:
         """After a reboot request: wait until the port disappears. True if it did."""
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
-            if not os.path.exists(self.path) or os.path.realpath(self.path) != self._device:
+            if self._points_elsewhere():
                 return True
             if self._ser is not None:
                 try:
