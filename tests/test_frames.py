@@ -68,6 +68,7 @@ pitches = st.floats(-89.0, 89.0, allow_nan=False)
 coords = st.floats(-1e3, 1e3, allow_nan=False)
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(st.tuples(coords, coords, coords), st.tuples(angles, pitches, angles),
        st.tuples(coords, coords, coords), st.tuples(angles, pitches, angles))

@@ -11,6 +11,9 @@ from platform_tools.rig import load_rig
 
 from .conftest import REPO, read_bom
 
+#: the bill is counted from the built CAD assembly: the quick loop (make test-fast) leaves them to make test
+pytestmark = pytest.mark.slow
+
 CATALOGUE = REPO / "bom" / "parts.yaml"
 
 

@@ -1,6 +1,8 @@
 """`platform_tools boson-config` run for real against two emulated Bosons over ptys."""
 from __future__ import annotations
 
+import pytest
+
 import json
 
 from platform_tools.boson import commands as C
@@ -59,6 +61,7 @@ def test_telemetry_left_alone_when_the_rig_records_none(cli, pair):
     assert left.state.settings["telemetry_state"] == C.TelemetryState.DISABLED
 
 
+@pytest.mark.slow
 def test_mode_defaults_to_the_rig_description(cli, pair):
     code, doc, _ = config(cli, "--set", "sync.boson_mode=master")
     assert code == 0 and doc["mode"] == "master" and sets(pair[0]) == MASTER
@@ -76,6 +79,7 @@ def test_table_output(cli, pair):
     assert "left" in out and "configured" in out and "ext_sync_mode: disable -> slave" in out
 
 
+@pytest.mark.slow
 def test_persist_warns_writes_flash_and_survives_reboot(cli, pair):
     left, right = pair
     code, doc, err = config(cli, "--slave", "--persist", "--reboot-verify")
@@ -95,6 +99,7 @@ def test_persist_warns_writes_flash_and_survives_reboot(cli, pair):
     assert all(emu.state.flash_writes == 1 for emu in pair)
 
 
+@pytest.mark.slow
 def test_soft_flash_error_is_a_warning_when_read_back_is_right(cli, make_boson):
     emu = make_boson(LEFT, flash_write_status=0x201)
     code, doc, _ = config(cli, "--camera", "left", "--slave", "--persist")
@@ -102,6 +107,7 @@ def test_soft_flash_error_is_a_warning_when_read_back_is_right(cli, make_boson):
     assert "flash write reported FlrError" in doc["cameras"][0]["warnings"][0]
 
 
+@pytest.mark.slow
 def test_check_trigger_passes_with_the_trigger_running(cli, pair, trigger):
     trigger.start()
     code, doc, _ = config(cli, "--slave", "--check-trigger", "--check-seconds", "0.3")
@@ -110,6 +116,7 @@ def test_check_trigger_passes_with_the_trigger_running(cli, pair, trigger):
         assert 22 <= cam["frame_rate_hz"] <= 38
 
 
+@pytest.mark.slow
 def test_check_trigger_reverts_when_no_frames_arrive(cli, pair):
     left, right = pair
     right.state.settings["ext_sync_mode"] = MASTER
@@ -123,6 +130,7 @@ def test_check_trigger_reverts_when_no_frames_arrive(cli, pair):
     assert "left: reverted" in err and len([l for l in err.splitlines() if "error:" in l]) == 2
 
 
+@pytest.mark.slow
 def test_check_trigger_failure_after_persist_is_never_written(cli, pair):
     code, doc, _ = config(cli, "--slave", "--check-trigger", "--check-seconds", "0.2", "--persist")
     assert code == 1
@@ -130,6 +138,7 @@ def test_check_trigger_failure_after_persist_is_never_written(cli, pair):
         assert emu.state.flash_writes == 0 and emu.state.flash["ext_sync_mode"] == DISABLE
 
 
+@pytest.mark.slow
 def test_one_dead_camera_leaves_the_other_untouched(cli, pair):
     left, right = pair
     right.faults = parse_faults("stall")
@@ -142,6 +151,7 @@ def test_one_dead_camera_leaves_the_other_untouched(cli, pair):
     assert "error: right: no reply" in err
 
 
+@pytest.mark.slow
 def test_a_camera_failing_at_the_read_step_aborts_the_other(cli, pair):
     left, right = pair
     right.faults = parse_faults(f"stall:fid=0x{C.GET_EXT_SYNC.function_id:08X}")
@@ -168,6 +178,7 @@ def test_failure_mid_apply_reverts_the_camera(cli, pair):
         assert emu.state.settings["telemetry_state"] == 0 and emu.state.settings["telemetry_location"] == 0
 
 
+@pytest.mark.slow
 def test_reboot_in_the_middle_of_the_set_command(cli, pair):
     left, right = pair
     left.faults = parse_faults(f"reboot:fid=0x{C.SET_EXT_SYNC.function_id:08X}:times=1")
@@ -176,6 +187,7 @@ def test_reboot_in_the_middle_of_the_set_command(cli, pair):
     assert left.state.boots == 2 and sets(left) == SLAVE and sets(right) == SLAVE
 
 
+@pytest.mark.slow
 def test_reboot_after_apply_loses_ram_and_is_reapplied(cli, pair):
     left, _ = pair
     # reboot while reading back: RAM reloads from flash (DISABLE); the tool notices and applies again.
@@ -189,6 +201,7 @@ def test_reboot_after_apply_loses_ram_and_is_reapplied(cli, pair):
     assert "re-enumerated" in cam["warnings"][0]
 
 
+@pytest.mark.slow
 def test_noisy_link_still_configures(cli, pair):
     for emu in pair:
         emu.faults = parse_faults("split,garbage:p=0.3,wrongseq:p=0.3,badcrc:p=0.2,busy:p=0.2")
@@ -204,6 +217,7 @@ def test_camera_left_needs_the_rig_serial(cli, pair):
     assert sets(pair[0]) == DISABLE
 
 
+@pytest.mark.slow
 def test_unknown_serial_lists_what_was_found(cli, pair):
     code, _, err = cli("boson-config", "--slave", "--camera", "12345", *FAST)
     assert code == 2 and "SN 12345" in err and f"SN {LEFT}" in err and f"SN {RIGHT}" in err
@@ -232,6 +246,7 @@ def test_port_that_does_not_exist(cli, tmp_path):
     assert code == 2 and "no such port" in err and doc["cameras"][0]["port_problem"]
 
 
+@pytest.mark.slow
 def test_bad_options(cli, pair):
     assert cli("boson-config", "--slave", "--reboot-verify", *FAST)[0] == 2
     assert cli("boson-config", "--master", "--check-trigger", *FAST)[0] == 2

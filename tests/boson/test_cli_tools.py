@@ -64,6 +64,7 @@ def test_restore_defaults(cli, pair):
     assert right.state.flash_writes == 0
 
 
+@pytest.mark.slow
 def test_raw(cli, make_boson):
     emu = make_boson(LEFT)
     code, out, _ = cli("boson-raw", "0x00050002", *FAST)
@@ -195,6 +196,7 @@ def test_a_port_that_does_not_exist_is_bad_input(cli, tmp_path):
         assert code == 2 and "no such port" in err, argv
 
 
+@pytest.mark.slow
 def test_info_prints_no_empty_table_when_every_camera_fails(cli, pair):
     for emu in pair:
         emu.faults = parse_faults("stall")

@@ -23,6 +23,7 @@ def boson(make_boson):
     client.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fault", ["busy:times=2", "notready:times=3", "badcrc:times=1", "drop:times=2",
                                    "split", "wrongseq", "garbage", "stall:times=1", "reboot:times=1"])
 def test_faults_are_recovered(boson, fault):
@@ -46,6 +47,7 @@ def test_persistent_busy_is_reported_by_name(boson):
     assert client.stats.retries == 3
 
 
+@pytest.mark.slow
 def test_camera_that_stops_answering_times_out(boson):
     emu, client = boson
     emu.faults = parse_faults("stall")
@@ -96,6 +98,7 @@ def test_flash_survives_reboot_and_ram_does_not(boson):
     assert os.readlink(emu.link) == emu.path             # the by-id link follows the new pty
 
 
+@pytest.mark.slow
 def test_frame_counter_advances_only_with_trigger_in_slave(boson, trigger):
     emu, client = boson
     a = client.call(C.GET_FRAME_COUNT)

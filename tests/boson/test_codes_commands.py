@@ -43,6 +43,7 @@ def test_ids_from_the_reference():
         assert C.BY_NAME[name].function_id == fid
 
 
+@pytest.mark.slow
 @given(st.integers(-2**31, 2**31 - 1))
 def test_i32_request_round_trip(value):
     payload = C.SET_EXT_SYNC.encode_request(value)

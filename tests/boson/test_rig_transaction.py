@@ -118,6 +118,7 @@ def by_label(doc):
     return {c["label"]: c for c in doc["cameras"]}
 
 
+@pytest.mark.slow
 def test_no_sync_without_persist_warns_that_flash_still_holds_slave(cli, make_boson):
     slave = dict(FACTORY, ext_sync_mode=int(C.ExtSyncMode.SLAVE))
     emu = make_boson(LEFT, settings=dict(slave), flash=dict(slave))

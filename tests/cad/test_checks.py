@@ -8,6 +8,9 @@ from cad import checks
 from cad.assembly import Assembly
 from cad.geom import Bounds, box
 
+#: every test needs the built CAD assembly: the quick loop (make test-fast) leaves them to make test
+pytestmark = pytest.mark.slow
+
 
 @pytest.mark.slow
 def test_every_check_passes_on_the_default_design(results):

@@ -37,6 +37,7 @@ def test_insert_sizes_come_from_its_rig_part(rig):
     assert ins.hole_diameter_mm == rig.dim(ins.part_id, "hole_diameter_mm") and ins.bore_mm == 3.0
 
 
+@pytest.mark.slow
 def test_joints_hold_fasteners_and_the_bom_counts_them(asm):
     from bom.bom import build_bom
     from bom.catalogue import load_catalogue

@@ -76,6 +76,7 @@ def test_moving_the_thermal_pair_moves_its_mount_window_and_frame(rig, asm):
     assert not inside(lower1, (x_wall, y, -46.0))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("override, key", [
     ("sensors.thermal.pose.xyz_mm=[0,0,-30]", "sensors.thermal.pose.xyz_mm"),
     ("sensors.thermal.baseline_mm=40", "sensors.thermal.baseline_mm"),

@@ -29,6 +29,7 @@ def handedness(corners, W, H):
     return di[0] * dj[1] - di[1] * dj[0]
 
 
+@pytest.mark.slow
 def test_easy_boards_found_exactly(synth_set):
     """Noise-free-ish images: every corner found at its true position; this also bounds the renderer's
     own bias (supersampling) well below the 0.08 px target."""
@@ -44,6 +45,7 @@ def test_easy_boards_found_exactly(synth_set):
     assert rms < 0.04, rms
 
 
+@pytest.mark.slow
 def test_real_boards_accuracy_and_no_wrong_labels(synth_set):
     folder = synth_set("real", n=6, seed=5)
     truth, corners = truth_of(folder)
@@ -61,6 +63,7 @@ def test_real_boards_accuracy_and_no_wrong_labels(synth_set):
     assert rms < 0.08, rms
 
 
+@pytest.mark.slow
 def test_8bit_images_work(synth_set):
     folder = synth_set("easy", n=4, seed=0)
     truth, corners = truth_of(folder)
@@ -92,6 +95,7 @@ def test_mirrored_image_never_gives_a_mirrored_grid(synth_set):
         assert det.complete and handedness(det.corners, 10, 7) > 0
 
 
+@pytest.mark.slow
 def test_partial_board_gets_board_coordinates(synth_set):
     """A board running out of the image: the corners found are at their true board coordinates."""
     folder = synth_set("real", n=12, seed=3)
@@ -108,6 +112,7 @@ def test_partial_board_gets_board_coordinates(synth_set):
     assert n_found > 0
 
 
+@pytest.mark.slow
 def test_square_board_and_other_sizes(synth_set):
     folder = synth_set("easy", n=2, seed=1, board=(7, 7))
     truth, corners = truth_of(folder)
@@ -176,6 +181,7 @@ def _one_line_error(r):
     return r.stderr
 
 
+@pytest.mark.slow
 def test_detect_command_writes_corners_and_summary(synth_set, calibrate, tmp_path):
     folder = synth_set("easy", n=4, seed=0)
     r = calibrate("detect", "--images", str(folder / "*.png"), "--board", "10x7", "--out", str(tmp_path / "d"),
@@ -188,6 +194,7 @@ def test_detect_command_writes_corners_and_summary(synth_set, calibrate, tmp_pat
     assert json.loads((tmp_path / "d" / "detections.json").read_text())["detected"] == 4
 
 
+@pytest.mark.slow
 def test_detect_command_bad_inputs(calibrate, tmp_path, synth_set):
     empty = tmp_path / "empty"
     empty.mkdir()
@@ -245,6 +252,7 @@ def test_grid_larger_than_the_board_everywhere_is_refused():
     assert "larger than" in why
 
 
+@pytest.mark.slow
 def test_steep_and_hard_boards_are_completed_without_wrong_labels(synth_set):
     """'hard' views (tilts up to 65 deg, heavy blur, low contrast, clutter): the grid growth finds
     the corners the linking misses, and no corner is ever reported at another's board coordinates."""
@@ -337,6 +345,7 @@ def test_faint_last_squares_inside_the_image_are_not_taken_for_the_board_edge():
     assert out is None or np.array_equal(out, ij), why
 
 
+@pytest.mark.slow
 def test_numba_kernels_agree_with_the_reference_code(synth_set):
     """The ring test and the linking run in numba (_fast.py); the numpy/Python versions they
     replaced are kept as references: same candidates, same line angles (to rounding), same links."""
@@ -392,6 +401,7 @@ def test_growth_stops_where_the_board_visibly_ends():
     assert len(new_xy) == W * H and np.ptp(new_ij, axis=0).max() + 1 == 7
 
 
+@pytest.mark.slow
 def test_shifted_seed_labels_and_pulled_subpix_do_not_lose_a_steep_small_board(synth_set):
     """'hard' seed 200, image 001: a steep board with ~9 px steps. The linking labels two corners of
     its bottom-left one lattice step off (growth used to spread that shift, and the lattice check then
@@ -407,6 +417,7 @@ def test_shifted_seed_labels_and_pulled_subpix_do_not_lose_a_steep_small_board(s
     assert not np.any(e[found] > 1.0), np.nanmax(e)
 
 
+@pytest.mark.slow
 def test_a_hand_over_the_rim_does_not_shift_the_labels(synth_set):
     """'hard' 7x7 seed 200, image 033 (the detection bench's): a hand covers the lower part of the
     board's left column. With that column not found, the squares past the next column were hidden
@@ -428,6 +439,7 @@ def _bench_image(synth_set, seed, k, board=(7, 7), difficulty="hard"):
     return det, np.linalg.norm(det.corners[rep] - q[rep], axis=1), im
 
 
+@pytest.mark.slow
 def test_a_corner_refinement_never_moved_is_not_reported_where_the_grid_guessed_it(synth_set):
     """'hard' 7x7 seed 100, image 032: a large, faint board whose top row the growth placed 10-15 px
     off; neither the saddle fit nor cornerSubPix moved them, and they were reported there. Unmeasured
@@ -437,6 +449,7 @@ def test_a_corner_refinement_never_moved_is_not_reported_where_the_grid_guessed_
     assert err.max() < 1.0, err.max()
 
 
+@pytest.mark.slow
 def test_a_corner_a_hand_touches_is_not_reported(synth_set):
     """'hard' 7x7 seed 200, image 035: the edge of a hand over the board's left column made a saddle
     4.9 px from a covered corner, which passed every other check."""

@@ -167,6 +167,7 @@ def hard_018(synth_set):
     return cv2.imread(str(folder / im["file"]), cv2.IMREAD_UNCHANGED), q, im
 
 
+@pytest.mark.slow
 def test_bench_board_with_one_faint_corner_is_now_complete(hard_018, monkeypatch):
     """'hard' seed 300, image 018 (the bench's hard set): a fully visible, steep, blurred board
     whose far top corner (7, 0) the growth never added (its squares too faint for the weakest-square

@@ -15,6 +15,9 @@ from calibration.extrinsics.cad import CAMERAS, IMU, cad_frames
 from platform_tools.rig.frames import Pose, rpy_to_matrix
 from platform_tools.rig import load_rig
 
+#: the extrinsics are read from the built CAD assembly: the quick loop (make test-fast) leaves them to make test
+pytestmark = pytest.mark.slow
+
 REPO = Path(__file__).resolve().parents[2]
 MOVED = ("sensors.thermal.pose.xyz_mm=[-2,0,-50]", "sensors.thermal.pose.rpy_deg=[0.5,-1,0.5]")
 
@@ -45,6 +48,7 @@ def test_cad_frames_equal_rig_frames(moved_rig):
     assert not tree.camera("thermal_left").isclose(base.camera("thermal_left"), mm=1.0, deg=1.0)
 
 
+@pytest.mark.slow
 def test_outputs(out, moved_rig):
     tree = cad_frames(moved_rig)
     names = sorted(p.name for p in out.iterdir())
@@ -129,6 +133,7 @@ def _trsf_pose(loc) -> Pose:
     return Pose(M[:, :3], M[:, 3])
 
 
+@pytest.mark.slow
 def test_step_placements_match_the_extrinsics(tmp_path, moved_rig):
     """Export the STEP as the CAD tool does, read it back (OCP via cadquery), find each camera part by
     name, take its placement from the STEP, and compare with the extrinsics to 0.01 mm / 0.01 deg;
@@ -172,6 +177,7 @@ def test_step_placements_match_the_extrinsics(tmp_path, moved_rig):
     assert np.abs(tree.T_rig["zed_x"].inverse().apply(cz)[1:] - tree.T_rig["zed_x"].inverse().apply(mid)[1:]).max() < 0.01
 
 
+@pytest.mark.slow
 def test_overlapping_cameras_are_bad_input(tmp_path):
     out = tmp_path / "o"
     r = run("extrinsics", "--from-cad", "--out", str(out), "--set", "sensors.thermal.pose.xyz_mm=[0,0,-5]")

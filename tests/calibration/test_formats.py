@@ -1,6 +1,8 @@
 """The exported files project like the solved lens, read back by the tools that use them."""
 from __future__ import annotations
 
+import pytest
+
 import cv2
 import mrcal
 import numpy as np
@@ -79,6 +81,7 @@ def test_kannala_brandt_exports_exactly_as_fisheye_and_equidistant(tmp_path):
     np.testing.assert_allclose(cam["intrinsics"] + cam["distortion_coeffs"], p)
 
 
+@pytest.mark.slow
 def test_splined_has_no_ros_equivalent_so_the_nearest_fit_is_reported():
     lm, intr = fisheye_truth(408.3, SIZE)
     sp = "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=12_Ny=10_fov_x_deg=100"

@@ -28,6 +28,7 @@ def truth_model(truth):
     return mrcal.cameramodel(intrinsics=truth, imagersize=SIZE)
 
 
+@pytest.mark.slow
 def test_mrcal_opencv8_recovers_the_lens(truth, corners):
     sol = mrcal_solver.solve(corners.observations, lensmodel=None, focal_px=F * 1.05)   # seed 5% off
     assert sol.lensmodel == "LENSMODEL_OPENCV8"
@@ -39,6 +40,7 @@ def test_mrcal_opencv8_recovers_the_lens(truth, corners):
     assert sol.cameramodel().optimization_inputs() is not None
 
 
+@pytest.mark.slow
 def test_outlier_image_and_corner_are_rejected_and_named(truth, corners):
     obs = corners.observations.subset(np.arange(corners.observations.n))
     bad = 3
@@ -94,6 +96,7 @@ def test_kannala_brandt_matches_opencv():
                                atol=1e-9)
 
 
+@pytest.mark.slow
 def test_default_meets_the_whole_image_target_on_covered_corners(truth):
     """No regularisation bias: with boards over the whole image, OPENCV8 is right to the corners."""
     s = simulate(*truth, SIZE, n=30, noise_px=0.05, seed=3, tilt_deg=35.0)
@@ -144,6 +147,7 @@ def test_opencv8_seed_is_the_stereographic_lens_and_does_not_depend_on_memory_la
     assert np.array_equal(opencv8_from_stereographic(strided, SIZE), seed)
 
 
+@pytest.mark.slow
 def test_the_same_corners_solve_to_the_same_lens_whatever_ran_before(truth, corners):
     """Determinism: the same observations, solved again after other solves and allocations in the
     process, from copies in other buffers, give the same lens to 1e-9 (relative). The iterative seed fit

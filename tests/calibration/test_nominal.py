@@ -12,6 +12,7 @@ from platform_tools.rig import load_rig
 mrcal = pytest.importorskip("mrcal")
 
 
+@pytest.mark.slow
 def test_nominal_models_project_rig_points(tmp_path: Path, calibrate):
     rig = load_rig()
     out = tmp_path / "nominal"
@@ -36,6 +37,7 @@ def test_nominal_models_project_rig_points(tmp_path: Path, calibrate):
     assert q[0] < m.intrinsics()[1][2]
 
 
+@pytest.mark.slow
 def test_nominal_follows_overrides(tmp_path: Path, calibrate):
     out = tmp_path / "nominal"
     r = calibrate("nominal", "--out", str(out), "--set", "sensors.thermal.baseline_mm=200")

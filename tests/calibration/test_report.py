@@ -169,6 +169,7 @@ def covered():
     return simulate(lm, intr, SIZE, n=40, noise_px=0.05, seed=11, tilt_deg=35.0)
 
 
+@pytest.mark.slow
 def test_cross_validation_grades_uncovered_corners(covered):
     """A covered set is trusted over the whole image. Without corners near the four image corners
     the model may be far off there, but where the verdict trusts it, it is right: trusted within its

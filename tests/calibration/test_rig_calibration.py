@@ -29,6 +29,7 @@ def rigset(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_truth_and_images(rigset):
     truth = json.loads((rigset / "truth.json").read_text())
     assert len(truth["sets"]) == 6 and truth["rgb_scale"] == 0.4
@@ -50,6 +51,7 @@ def test_truth_and_images(rigset):
     assert d.complete and np.sqrt(np.mean(err ** 2)) < 0.3
 
 
+@pytest.mark.slow
 def test_rig_refines_towards_the_truth(rigset, tmp_path):
     out = tmp_path / "cal"
     r = run("rig", "--images", str(rigset), "--out", str(out), "--json", "-q", "--tolerance-mm", "0.5")
@@ -97,12 +99,14 @@ def _bad(args, tmp_path, *words):
     return lines[0]
 
 
+@pytest.mark.slow
 def test_missing_camera(rigset, tmp_path):
     d = _copy(rigset, tmp_path / "set")
     shutil.rmtree(d / "thermal_right")
     _bad(["--images", str(d)], tmp_path, "thermal_right/")
 
 
+@pytest.mark.slow
 def test_timestamps_that_do_not_pair(rigset, tmp_path):
     d = _copy(rigset, tmp_path / "set")
     f = sorted((d / "thermal_left").iterdir())[2]
@@ -110,6 +114,7 @@ def test_timestamps_that_do_not_pair(rigset, tmp_path):
     _bad(["--images", str(d)], tmp_path, "do not pair")
 
 
+@pytest.mark.slow
 def test_names_that_do_not_pair(rigset, tmp_path):
     d = tmp_path / "set"
     for c in CAMERAS:
@@ -120,6 +125,7 @@ def test_names_that_do_not_pair(rigset, tmp_path):
     _bad(["--images", str(d)], tmp_path, "same name")
 
 
+@pytest.mark.slow
 def test_board_seen_by_one_camera_only(rigset, tmp_path):
     d = _copy(rigset, tmp_path / "set")
     for c in ("zed_right", "thermal_left", "thermal_right"):
@@ -128,6 +134,7 @@ def test_board_seen_by_one_camera_only(rigset, tmp_path):
     _bad(["--images", str(d)], tmp_path, "more than one camera")
 
 
+@pytest.mark.slow
 def test_thermal_never_sees_the_board(rigset, tmp_path):
     d = _copy(rigset, tmp_path / "set")
     for f in (d / "thermal_right").iterdir():
@@ -135,5 +142,6 @@ def test_thermal_never_sees_the_board(rigset, tmp_path):
     _bad(["--images", str(d)], tmp_path, "thermal_right", "0 set(s)")
 
 
+@pytest.mark.slow
 def test_overlapping_rig(rigset, tmp_path):
     _bad(["--images", str(rigset), "--set", "sensors.thermal.pose.xyz_mm=[0,0,-5]"], tmp_path, "overlap")

@@ -66,6 +66,7 @@ def test_board_pattern_is_a_checker_with_heat_spread():
     assert sharp < soft < 0
 
 
+@pytest.mark.slow
 def test_dataset_files_and_truth(synth_set, lens):
     out = synth_set("real", n=4, seed=7)
     truth = json.loads((out / "truth.json").read_text())
@@ -90,6 +91,7 @@ def test_dataset_files_and_truth(synth_set, lens):
         assert im["visible"] == int(seen.sum())
 
 
+@pytest.mark.slow
 def test_same_seed_same_images_other_seed_other_images(tmp_path):
     a = render_dataset(tmp_path / "a", n=1, difficulty="hard", seed=11, show_progress=False)
     b = render_dataset(tmp_path / "b", n=1, difficulty="hard", seed=11, show_progress=False)
@@ -98,6 +100,7 @@ def test_same_seed_same_images_other_seed_other_images(tmp_path):
     assert (tmp_path / "a" / "000.png").read_bytes() == (tmp_path / "b" / "000.png").read_bytes()
 
 
+@pytest.mark.slow
 def test_difficulty_changes_the_look(synth_set):
     """Easy boards have more contrast over noise than hard ones, measured on the images."""
     def cnr(folder):
@@ -116,6 +119,7 @@ def test_difficulty_changes_the_look(synth_set):
     assert LEVELS["hard"].max_tilt_deg > LEVELS["real"].max_tilt_deg > LEVELS["easy"].max_tilt_deg
 
 
+@pytest.mark.slow
 def test_partial_boards_in_real_sets(tmp_path):
     truth = render_dataset(tmp_path / "s", n=12, difficulty="real", seed=3, show_progress=False)
     vis = [im["visible"] for im in truth["images"]]
@@ -123,6 +127,7 @@ def test_partial_boards_in_real_sets(tmp_path):
     assert all(v >= 0.35 * 70 for v in vis)
 
 
+@pytest.mark.slow
 def test_custom_lens_is_the_truth(tmp_path):
     intr = (400.0, 400.0, 320.0, 256.0, -0.05, 0.01, 1e-4, -1e-4, 0, 0, 0, 0)
     lens = camera_model("LENSMODEL_OPENCV8", intr, (640, 512))
@@ -135,6 +140,7 @@ def test_custom_lens_is_the_truth(tmp_path):
     assert again == truth
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args, message", [
     (["--board", "10"], "--board"),
     (["--board", "1x7"], "--board"),
@@ -149,6 +155,7 @@ def test_synth_command_bad_input(calibrate, tmp_path, args, message):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow
 def test_synth_command_json(calibrate, tmp_path):
     r = calibrate("synth", "--out", str(tmp_path / "o"), "--n", "2", "--difficulty", "easy", "--board", "8x6",
                   "--square", "0.05", "--seed", "4", "--json")

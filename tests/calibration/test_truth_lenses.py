@@ -110,6 +110,7 @@ def test_truth_files_are_read_by_independent_tools(family, tmp_path):
         assert "distortion_model: plumb_bob" in text and "-0.3565" in text
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("size", SENSOR_SIZES)
 @pytest.mark.parametrize("family", FOREIGN)
 def test_other_sensor_sizes_keep_the_field_of_view(family, size):

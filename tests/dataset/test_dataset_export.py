@@ -14,6 +14,9 @@ from platform_tools.dataset import thermal8
 from platform_tools.dataset.export import ExportError, Params, export
 from platform_tools.sim import geometry
 
+#: every test exports a simulated recording: the quick loop (make test-fast) leaves them to make test
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def done(sim, rig, tmp_path_factory):

@@ -45,6 +45,7 @@ def scene(rig):
     return dict(boxes=boxes, zed=zed, th=th, zr=zr, tr=tr, depth=depth, reg=reg)
 
 
+@pytest.mark.slow
 def test_scene_has_occlusions_and_missing_depth(scene):
     d = scene["depth"]
     assert np.isnan(d).mean() > 0.2                            # sky: no depth
@@ -62,6 +63,7 @@ def test_every_point_lands_within_half_a_pixel_of_its_truth(scene):
     assert np.allclose(zs[landed], z_true[landed] / 1000.0, rtol=1e-5)
 
 
+@pytest.mark.slow
 def test_registered_image_lands_where_it_should(scene):
     """Register the true 3D points as the 'colour': each valid thermal pixel's registered point must
     project back onto that pixel (within 0.5 px) and lie on the surface the thermal camera sees."""
@@ -91,6 +93,7 @@ def test_registered_image_lands_where_it_should(scene):
     assert err[interior[res.mask]].max() < 0.5
 
 
+@pytest.mark.slow
 def test_occluded_points_never_overwrite_nearer_ones(scene):
     res = scene["reg"].register(scene["depth"], np.zeros(scene["depth"].shape, np.float32))
     truth = scene["tr"].z_m
@@ -122,6 +125,7 @@ def test_no_splatting_without_depth(scene):
     assert not reg.register(np.zeros(depth.shape, np.float32), depth).mask.any()
 
 
+@pytest.mark.slow
 def test_numba_and_numpy_agree(scene):
     rgb = (np.random.default_rng(1).random((*scene["depth"].shape, 3)) * 255).astype(np.uint8)
     a = scene["reg"].register(scene["depth"], rgb)

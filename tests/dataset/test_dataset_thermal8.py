@@ -44,6 +44,7 @@ def test_identical_to_the_paper_on_full_frames(params, base, hot):
     assert info["percentile_clip"] == (raw.max() >= 35000)
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None)
 @given(st.integers(16, 80), st.integers(16, 80), st.integers(0, 60000), st.integers(1, 5000), st.integers(0, 2**31))
 def test_identical_to_the_paper_on_any_frame(params, h, w, base, spread, seed):

@@ -30,6 +30,7 @@ def wrong_pairs(kz, kt, ref, a):
     return sum(1 for z, t in pairs if z != t), len(pairs)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("latency_ms", [0.3, 10, 20, 40])
 @pytest.mark.parametrize("zed_step,thermal_step", [(0, 0), (-100, 0), (20, 0), (250, 0), (5, 5), (-5, -5),
                                                    (-20, -20), (250, 250)])

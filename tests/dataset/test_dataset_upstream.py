@@ -176,6 +176,7 @@ def test_topic_map_with_depth_exports_with_camera_info(tmp_path, capsys):
     assert rows[1].count("camera_info (") >= 1
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("text, words", [
     ("thermal_left: /a\nthermal_right: /b\nzed_left: /c\nzed_centre: /d\n", ["unknown stream name 'zed_centre'"]),
     ("thermal_left: /a\nthermal_right: b\nzed_left: /c\n", ["thermal_right", "not a topic name"]),

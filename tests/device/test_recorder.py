@@ -100,6 +100,7 @@ def test_the_button_loop_with_a_bouncing_button_starts_one_recording(make_record
     assert len(rec.finished) == 1 and len([e for e in events(rec) if e["event"] == "recording started"]) == 1
 
 
+@pytest.mark.slow
 def test_missing_camera_refuses_to_start_then_the_next_press_works(make_recorder, dev_dir):
     rec = make_recorder()
     (dev_dir / "boson_right_video").unlink()

@@ -62,6 +62,7 @@ def test_sigterm_during_a_recording_stops_it_cleanly(data_drive, dev_dir, tmp_pa
     assert [e["event"] for e in events(out)][-1] == "exit"
 
 
+@pytest.mark.slow
 def test_bad_gpio_backend_is_one_line_exit_2(platform_tools):
     r = platform_tools("record-service", "--gpio", "banana")
     assert r.returncode == 2 and "--gpio banana" in r.stderr and "Traceback" not in r.stderr

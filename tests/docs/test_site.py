@@ -11,6 +11,9 @@ import pytest
 from cad.build import main as build_main
 from tests.bom.conftest import REPO
 
+#: every test reads the generated site (CAD pictures) in a browser: the quick loop (make test-fast) leaves them to make test
+pytestmark = pytest.mark.slow
+
 PAGES = ["index.html", "assembly.html", "bom.html", "wiring.html", "printing.html"]
 SCREENSHOT = REPO / "build" / "test-screenshots" / "docs_index.png"
 

@@ -45,6 +45,7 @@ def test_the_default_render_passes_every_rule(folder, rig):
     assert compose["health"]["network_mode"] == "none" and "/dev:/dev:ro" not in compose["health"]["volumes"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("edit,message", [
     (lambda s: s["recorder"].update(privileged=True), "recorder is privileged"),
     (lambda s: s["health"].update(pid="host"), "health shares the host pid"),
@@ -61,6 +62,7 @@ def test_a_widened_service_fails_least_privilege(folder, rig, edit, message):
     assert result.status == FAILED and message in result.detail, result.detail
 
 
+@pytest.mark.slow
 def test_a_zero_domain_id_fails(folder, rig):
     zero = load_rig(None, [*SERIALS, "on_device.ros_domain_id=0"])
     write(zero, folder)
@@ -68,6 +70,7 @@ def test_a_zero_domain_id_fails(folder, rig):
     assert result.status == FAILED and "ros_domain_id is 0" in result.detail
 
 
+@pytest.mark.slow
 def test_discovery_follows_the_rig_and_the_distribution(tmp_path):
     for sets, env in [((), {"ROS_LOCALHOST_ONLY": "1"}),
                       (("on_device.dds_discovery=subnet",), {"ROS_LOCALHOST_ONLY": "0"}),
@@ -125,6 +128,7 @@ def test_the_zed_image_is_built_as_stereolabs_builds_it(folder):
     assert "ARG ZED_SDK=5.0" in text and "ARG L4T_VERSION=36.4" in text and "ARG L4T_REVISION=4.4" in text
 
 
+@pytest.mark.slow
 def test_a_pinned_base_image_reaches_the_dockerfiles(tmp_path):
     digest = "sha256:" + "ab" * 32
     r = load_rig(None, [*SERIALS, f"on_device.base_images.ros_digest={digest}"])
@@ -170,6 +174,7 @@ def test_the_budget_is_computed_from_the_rig(rig):
     assert budget.total_mb_per_s(d16) == pytest.approx(budget.total_mb_per_s(depth) - d32 / 2 / 1e6)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sets,status", [
     ((), OK),
     (("on_device.zed_depth_mode=NEURAL",), FAILED),                                     # ~128 MB/s

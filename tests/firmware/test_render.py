@@ -113,6 +113,7 @@ def test_zed_resolution_follows_the_camera_model():
     assert params(rendered("camera_models.zed_x_hd1200.height_px=1080"), "zed")["general"]["grab_resolution"] == "HD1080"
 
 
+@pytest.mark.slow
 def test_udev_rules_name_cameras_only_when_serials_are_known():
     assert "SYMLINK" not in rendered()["udev/99-rgbt-boson.rules"]
     rules = rendered(SERIALS[1], SERIALS[3])["udev/99-rgbt-boson.rules"]

@@ -56,6 +56,7 @@ def test_bad_override_is_one_line(override, words):
         assert w in line, (w, line)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("override,key,words", [
     ("sensors.thermal.baseline_mm=-150", "sensors.thermal.baseline_mm", ["got -150 mm", "> 0"]),
     ("sensors.thermal.baseline_mm=abc", "sensors.thermal.baseline_mm", ["'abc'", "a number in mm"]),
