@@ -14,6 +14,13 @@ the reply bad. Time adapts to the camera: a reply that arrives after its attempt
 the call (taken during the next attempt), and every call waits at least ``Timeouts.adapt`` times the
 slowest reply latency seen recently (capped at ``Timeouts.max_first_s``), so a slow camera costs its
 latency, not a timeout and a retry per command; a dead one costs (retries + 1) x the timeout, as before.
+When a late reply answers a call, the camera still owes the replies to the attempts sent after it (it
+works through its requests in order): they are drained before the call returns, so the next command
+is not sent behind them, its latency is not mistaken for twice the camera's, and the one timeout the
+camera cost is the only one of the session.
+
+``camera_serial()`` asks the camera its serial number once per opening of the port: identity and the
+set-up read it from the same open client, and a re-opened port (re-enumeration) is asked again.
 """
 from __future__ import annotations
 
@@ -54,7 +61,9 @@ class Timeouts:
 class Stats:
     calls: int = 0
     retries: int = 0
+    timeouts: int = 0        # attempts that got no reply within their first-byte timeout
     discarded: int = 0       # well-formed frames that did not match the request
+    drained: int = 0         # replies to a call's later attempts, read after a late reply answered it
     bad_frames: int = 0      # CRC or framing errors seen
     reopens: int = 0
     errors: list[str] = field(default_factory=list)
@@ -76,6 +85,7 @@ class BosonClient:
         self.stats = Stats()
         self._decoder = fslp.StreamDecoder()
         self.latency_s = 0.0      # the slowest reply latency of the recent calls (decays by half per call)
+        self._serial: tuple[int, int] | None = None   # (camera serial, self.reopens when it was read)
 
     # ------------------------------------------------------------------ lifecycle
     def open(self) -> "BosonClient":
@@ -99,6 +109,18 @@ class BosonClient:
     def next_sequence(self) -> int:
         self._seq = fslp.next_sequence(self._seq)
         return self._seq
+
+    @property
+    def requests(self) -> int:
+        """Requests sent so far (every attempt of every call)."""
+        return self.stats.calls + self.stats.retries
+
+    def camera_serial(self) -> int:
+        """The camera's serial number (bosonGetCameraSN), asked once per opening of the port."""
+        if self._serial is None or self._serial[1] != self.reopens:
+            sn = self.call(C.GET_CAMERA_SN)
+            self._serial = (sn, self.reopens)
+        return self._serial[0]
 
     # ------------------------------------------------------------------ one exchange
     def exchange(self, sequence: int, function_id: int, payload: bytes, first_s: float, *,
@@ -179,6 +201,7 @@ class BosonClient:
                 self.stats.reopens += 1
                 continue
             except ReplyTimeout as exc:
+                self.stats.timeouts += 1
                 last, flush = exc, False     # keep what arrives late: it may be the reply
                 sent[seq] = time.monotonic() - first_s
                 # no growth of first_s here: the late reply is taken on the next attempt anyway, and a
@@ -189,6 +212,9 @@ class BosonClient:
                 last, sent, flush = exc, {}, True
                 log.info("%s: %s (attempt %d of %d)", self.label, exc, attempt + 1, retries + 1)
                 continue
+            if frame.sequence != seq:   # a late reply to an earlier attempt: the later ones are owed
+                owed = {s for s, t in sent.items() if t > sent[frame.sequence]} | {seq}
+                self._drain(owed, function_id, self.first_byte_timeout(command))   # the latency just learned
             if frame.status == 0:
                 return frame.payload
             err = error_for(frame.status, name, self.label)
@@ -203,6 +229,33 @@ class BosonClient:
             raise last
         raise type(last)(f"{last} (gave up after {retries + 1} attempts)")
 
+    def _drain(self, sequences: set[int], function_id: int, wait_s: float) -> None:
+        """Read the replies the camera still owes to ``sequences`` (a call's attempts sent after the one
+        whose late reply answered it), each within ``wait_s``; stop at the first that does not come, or
+        when the port vanishes (the next command re-opens it)."""
+        while sequences:
+            deadline = time.monotonic() + wait_s
+            got = False
+            while not got and time.monotonic() < deadline:
+                try:
+                    data = self.transport.read(deadline - time.monotonic())
+                except PortGone:
+                    return
+                if not data:
+                    continue
+                if self.hook:
+                    self.hook("rx", data)
+                for item in self._decoder.feed(data):
+                    if isinstance(item, fslp.Frame) and item.function_id == function_id \
+                            and item.sequence in sequences:
+                        sequences.discard(item.sequence)
+                        self.stats.drained += 1
+                        got = True
+            if not got:
+                log.info("%s: %d owed repl%s to 0x%08X did not come", self.label, len(sequences),
+                         "y" if len(sequences) == 1 else "ies", function_id)
+                return
+
     def call(self, command: C.Command, *args: Any, retries: int | None = None) -> Any:
         payload = command.encode_request(*args)
         reply = self.call_raw(command.function_id, payload, command=command, retries=retries)
@@ -215,6 +268,7 @@ class BosonClient:
     def reboot(self, *, boot_wait_s: float | None = None) -> None:
         """Reboot and wait until the camera answers again on its (re-enumerated) port."""
         raw = fslp.request(self.next_sequence(), C.REBOOT.function_id)
+        self.stats.calls += 1
         try:
             self.transport.flush_input()
             self.transport.write(raw)
@@ -232,7 +286,9 @@ class BosonClient:
         self.stats.reopens += 1
         while True:
             try:
-                return self.call(C.GET_CAMERA_SN, retries=0)
+                sn = self.call(C.GET_CAMERA_SN, retries=0)
+                self._serial = (sn, self.reopens)
+                return sn
             except (TransportError, CameraError) as exc:
                 if isinstance(exc, PortGone):
                     self.transport.reopen(max(deadline - time.monotonic(), 0.0))

@@ -8,6 +8,7 @@ stops the others. Rows are plain dicts, ready for JSON.
 """
 from __future__ import annotations
 
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Callable, Sequence, TypeVar
@@ -27,20 +28,66 @@ def open_client(target: Target, timeouts: Timeouts = Timeouts(), retries: int = 
     return BosonClient(SerialTransport(target.port), timeouts=timeouts, retries=retries, label=target.label).open()
 
 
+class ClientPool:
+    """One open client per port for a whole command: identity asks each port its serial number
+    (platform_tools.boson.identity), and the work after it goes through the same client, so the serial
+    is read once (``BosonClient.camera_serial``) and a slow camera's latency, learned from its first
+    reply, is kept instead of being learned again (a timeout) by a new client. Closes every client on
+    exit."""
+
+    def __init__(self, timeouts: Timeouts = Timeouts(), retries: int = 3, *,
+                 opener: Callable[[Target, Timeouts, int], BosonClient] | None = None):
+        self.timeouts, self.retries = timeouts, retries
+        self._opener = opener or open_client      # how a port is opened (a test passes a loopback one)
+        self._clients: dict[str, BosonClient] = {}
+        self._lock = threading.Lock()
+
+    def open(self, target: Target) -> BosonClient:
+        """The open client on ``target.port`` (opened now if needed; TransportError when it cannot be),
+        labelled as the target."""
+        with self._lock:
+            client = self._clients.get(target.port)
+        if client is None or not client.transport.is_open:
+            client = self._opener(target, self.timeouts, self.retries)
+            with self._lock:
+                self._clients[target.port] = client
+        client.label = target.label
+        return client
+
+    def keep(self, ports) -> None:
+        """Close the clients of every other port (cameras the command will not touch: their ports are
+        opened exclusively, so another program may want them)."""
+        wanted = set(ports)
+        with self._lock:
+            drop = [p for p in self._clients if p not in wanted]
+            clients = [self._clients.pop(p) for p in drop]
+        for client in clients:
+            client.close()
+
+    def close(self) -> None:
+        self.keep(())
+
+    def __enter__(self) -> "ClientPool":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
 def per_camera(targets: Sequence[Target], work: Callable[[Target], T]) -> list[T]:
     """``work(target)`` on every camera at once, results in the order of ``targets``."""
     with ThreadPoolExecutor(max_workers=max(1, len(targets))) as pool:
         return list(pool.map(work, targets))
 
 
-def on_camera(target: Target, timeouts: Timeouts, retries: int, work: Callable[[BosonClient], dict],
-              **row: Any) -> dict:
-    """Open the target, ``row.update(work(client))``, close; a BosonError becomes ``row["error"]``.
-    The row starts with the target's label and port (and the keyword arguments); a port that cannot be
-    opened (missing, denied, in use) also sets ``row["port_problem"]`` (bad input: exit 2)."""
+def on_camera(target: Target, pool: ClientPool, work: Callable[[BosonClient], dict], **row: Any) -> dict:
+    """``row.update(work(client))`` with the pool's client on the target (the pool closes it); a
+    BosonError becomes ``row["error"]``. The row starts with the target's label and port (and the keyword
+    arguments); a port that cannot be opened (missing, denied, in use) also sets ``row["port_problem"]``
+    (bad input: exit 2)."""
     out: dict = {"label": target.label, "port": target.port, **row}
     try:
-        client = open_client(target, timeouts, retries)
+        client = pool.open(target)
     except PORT_PROBLEMS as exc:
         out["error"], out["port_problem"] = str(exc), True
         return out
@@ -48,8 +95,7 @@ def on_camera(target: Target, timeouts: Timeouts, retries: int, work: Callable[[
         out["error"] = str(exc)
         return out
     try:
-        with client:
-            out.update(work(client))
+        out.update(work(client))
     except BosonError as exc:
         out["error"] = str(exc)
     return out
@@ -91,7 +137,8 @@ def read_info(client: BosonClient, keys: Sequence[str] = INFO_KEYS) -> dict[str,
     out = {}
     for key in keys:
         command, show = INFO[key]
-        out[key] = show(client.call(command))
+        value = client.camera_serial() if command is C.GET_CAMERA_SN else client.call(command)
+        out[key] = show(value)
     return out
 
 

@@ -27,7 +27,9 @@ def _add_camera_options(p: argparse.ArgumentParser, *, default: str = "all") -> 
                         "sensors.thermal.left.serial / .right.serial of the rig description")
     g.add_argument("--port", metavar="P", help="use this serial port instead of discovering cameras")
     g.add_argument("--timeout", type=float, default=1.0, metavar="S",
-                   help="seconds to wait for a reply's first byte (slow commands get 5x; default 1)")
+                   help="seconds to wait for a reply's first byte (slow commands get 5x; default 1). A "
+                        "camera slower than this costs one timeout: its late reply is taken and every later "
+                        "command waits twice the latency learned from it")
     g.add_argument("--retries", type=int, default=3, metavar="N", help="retries per command (default 3)")
     g.add_argument("--reopen-timeout", type=float, default=15.0, metavar="S",
                    help="seconds to wait for a camera to come back after it re-enumerates (default 15)")
@@ -40,16 +42,21 @@ def _timeouts(args) -> Timeouts:
                     reopen_s=args.reopen_timeout)
 
 
-def _targets(args, rig) -> list[discovery.Target]:
+def _pool(args) -> ops.ClientPool:
+    """The command's clients, one per port, kept open from identity to the end of the command."""
+    return ops.ClientPool(_timeouts(args), args.retries)
+
+
+def _targets(args, rig, pool: ops.ClientPool) -> list[discovery.Target]:
     """The cameras to work on: ``--port`` as given, else every Boson found, identified by the serial
-    number each answers over its serial link (platform_tools.boson.identity)."""
+    number each answers over its serial link (platform_tools.boson.identity), through ``pool``'s clients."""
     found = [] if args.port else discovery.discover()
     try:
         if args.port or not any(f.source != "usb" for f in found):
             return discovery.select_targets(str(args.camera), rig, found, args.port)
-        timeouts = _timeouts(args)
-        identified = identity.identify(found, lambda t: ops.open_client(t, timeouts, args.retries), ops.per_camera)
+        identified = identity.identify(found, pool.open, ops.per_camera)
         targets, warnings = identity.assign(str(args.camera), rig, identified, found)
+        pool.keep(t.port for t in targets)
     except discovery.SelectionError as exc:
         raise UserError(str(exc)) from None
     if not args.quiet:
@@ -61,9 +68,9 @@ def _targets(args, rig) -> list[discovery.Target]:
 def _on_each(args, rig, work, row=lambda target: {}) -> list[dict]:
     """``work(target, client)`` on every selected camera at once: one row per camera, starting with
     label, port and ``row(target)`` (see ops.on_camera)."""
-    timeouts = _timeouts(args)
-    return ops.per_camera(_targets(args, rig), lambda t: ops.on_camera(
-        t, timeouts, args.retries, lambda client: work(t, client), **row(t)))
+    with _pool(args) as pool:
+        return ops.per_camera(_targets(args, rig, pool), lambda t: ops.on_camera(
+            t, pool, lambda client: work(t, client), **row(t)))
 
 
 def _report_errors(rows: list[dict]) -> int:
@@ -179,33 +186,27 @@ def _plan(args, rig) -> syncsetup.Plan:
         raise UserError(str(exc)) from None
 
 
-def _configure_rig(targets, args, plan) -> list[syncsetup.CameraResult]:
-    """Open every camera, then run the plan as one transaction; a camera that cannot be opened leaves
-    the others untouched (``aborted``)."""
+def _configure_rig(targets, pool: ops.ClientPool, plan) -> list[syncsetup.CameraResult]:
+    """Every camera's client (open since identity), then the plan as one transaction; a camera that
+    cannot be opened leaves the others untouched (``aborted``)."""
     results = [syncsetup.CameraResult(t.label, t.port, t.serial) for t in targets]
-    timeouts = _timeouts(args)
 
     def open_one(i: int):
         try:
-            return ops.open_client(targets[i], timeouts, args.retries)
+            return pool.open(targets[i])
         except BosonError as exc:
             results[i].error = str(exc)
             results[i].port_problem = isinstance(exc, PORT_PROBLEMS)
             return None
     clients = ops.per_camera(range(len(targets)), open_one)
-    try:
-        if any(c is None for c in clients):
-            bad = ", ".join(t.label for t, c in zip(targets, clients) if c is None)
-            for r, c in zip(results, clients):
-                if c is not None:
-                    r.status, r.error = "aborted", f"not configured: {bad} could not be opened (all or nothing)"
-            return results
-        members = [transaction.Member(c, t.serial, r) for c, t, r in zip(clients, targets, results)]
-        return transaction.configure_rig(members, plan)
-    finally:
-        for c in clients:
+    if any(c is None for c in clients):
+        bad = ", ".join(t.label for t, c in zip(targets, clients) if c is None)
+        for r, c in zip(results, clients):
             if c is not None:
-                c.close()
+                r.status, r.error = "aborted", f"not configured: {bad} could not be opened (all or nothing)"
+        return results
+    members = [transaction.Member(c, t.serial, r) for c, t, r in zip(clients, targets, results)]
+    return transaction.configure_rig(members, plan)
 
 
 def cmd_config(args) -> int:
@@ -215,7 +216,8 @@ def cmd_config(args) -> int:
     if not args.quiet:
         for w in warnings:
             print(f"platform_tools: warning: {w}", file=sys.stderr)
-    results = _configure_rig(_targets(args, rig), args, plan)
+    with _pool(args) as pool:
+        results = _configure_rig(_targets(args, rig, pool), pool, plan)
     doc = syncsetup.summary(plan, results, warnings)
     if args.json:
         print_json(doc)
@@ -325,12 +327,13 @@ def cmd_raw(args) -> int:
     if fid in C.FLASH_OR_REBOOT and not args.yes:
         raise UserError(f"0x{fid:08X} ({C.BY_ID[fid].name}) writes or erases the camera's flash or reboots it: "
                         "add --yes to send it")
-    targets = _targets(args, rig_from_args(args))
-    if len(targets) != 1:
-        raise UserError(f"boson-raw talks to one camera; {len(targets)} match: choose with --camera or --port")
-    target = targets[0]
-    doc = ops.on_camera(target, _timeouts(args), args.retries, lambda c: ops.raw_call(c, fid, payload),
-                        **ops.raw_request(fid, payload))
+    rig = rig_from_args(args)
+    with _pool(args) as pool:
+        targets = _targets(args, rig, pool)
+        if len(targets) != 1:
+            raise UserError(f"boson-raw talks to one camera; {len(targets)} match: choose with --camera or --port")
+        doc = ops.on_camera(targets[0], pool, lambda c: ops.raw_call(c, fid, payload),
+                            **ops.raw_request(fid, payload))
     if args.json:
         print_json(doc)
     elif not args.quiet and "error" not in doc:

@@ -186,3 +186,102 @@ def test_every_setter_has_a_getter_that_reads_back_what_it_set():
         value = 1
         client.call(setter, value)
         assert int(client.call(getter)) == value, setter.name
+
+
+
+def test_a_late_reply_answers_its_call_and_the_reply_owed_to_the_retry_is_drained():
+    """A camera slower than the timeout, working through its requests in order: the first attempt gets
+    no reply in time, the retry is sent, then the camera answers both. The first reply answers the call;
+    the second (owed to the retry) is read before the call returns, so the next command is not sent
+    behind it and finds no stale reply."""
+    state = BosonState(93588)
+    respond, held = answer_with(state), []
+
+    def slow(data: bytes) -> list[bytes]:
+        (req,) = fslp.StreamDecoder().feed(data)
+        if req.sequence == 1:
+            held.append(data)                 # still working on it when the first-byte timeout passes
+            return []
+        out = [c for d in held for c in respond(d)] + list(respond(data))
+        held.clear()
+        return out
+    client, port = client_for(slow)
+    assert client.call(C.GET_CAMERA_SN) == 93588
+    assert (client.stats.timeouts, client.stats.retries, client.stats.drained) == (1, 1, 1)
+    assert client.call(C.GET_CAMERA_PN) == "20640000EMULATED"
+    assert (client.stats.timeouts, client.stats.discarded, len(port.written)) == (1, 0, 3)
+
+def test_the_serial_is_asked_once_per_opening_of_the_port():
+    client, port, _ = camera()
+    assert client.camera_serial() == client.camera_serial() == 93588
+    assert len(port.written) == 1
+    port.vanish()
+    client.call(C.GET_EXT_SYNC)            # the port re-opened: another camera may be there now
+    assert client.camera_serial() == 93588 and len(port.written) == 3     # SN, GetExtSyncMode, SN again
+
+
+def test_the_set_up_spends_no_round_trip_an_earlier_read_settles(rig):
+    """Serial (once), four settings read, three written, the three written read back: 11 requests; a second
+    run writes nothing and reads each setting once."""
+    plan = syncsetup.plan_for(rig, mode="slave", persist=False)
+    client, port, state = camera()
+    first = configure_one(client, 93588, plan, port.path)
+    assert first.status == "configured" and first.link["requests"] == len(port.written) == 11
+    names = [C.BY_ID[fslp.StreamDecoder().feed(w)[0].function_id].name for w in port.written]
+    assert names.count("bosonGetCameraSN") == 1 and names.count("telemetryGetPacking") == 1
+    assert sum(n.startswith(("bosonSet", "telemetrySet")) for n in names) == 3
+    again = configure_one(client, 93588, plan, port.path)
+    assert again.status == "unchanged" and len(port.written) == 11 + 4
+    assert {k: int(v) for k, v in first.after.items()} == {k: state.settings[k] for k in first.after}
+
+
+def test_the_pool_keeps_one_client_per_port_and_closes_the_ports_it_will_not_use():
+    from platform_tools.boson.discovery import Target
+    opened = []
+
+    def opener(target, timeouts, retries):
+        client, _, _ = camera()
+        opened.append(target.port)
+        return client
+    with ops.ClientPool(FAST, 1, opener=opener) as pool:
+        a = pool.open(Target("/dev/a", "/dev/a", None))
+        assert a.camera_serial() == 93588
+        again = pool.open(Target("left", "/dev/a", 93588))      # identity's client, relabelled
+        assert again is a and a.label == "left" and a.requests == 1
+        b = pool.open(Target("/dev/b", "/dev/b", None))
+        pool.keep(p for p in ["/dev/a"])                         # /dev/b holds a camera the command leaves alone
+        assert a.transport.is_open and not b.transport.is_open
+        assert pool.open(Target("b", "/dev/b", None)) is not b and opened == ["/dev/a", "/dev/b", "/dev/b"]
+    assert not a.transport.is_open
+
+
+def test_a_port_that_vanishes_while_owed_replies_are_drained_still_answers_the_call():
+    """The late reply arrives, then the camera re-enumerates before its reply to the duplicate: the call
+    is answered, and the next command re-opens the port."""
+    state = BosonState(93588)
+    respond, held = answer_with(state), []
+
+    def slow(data: bytes) -> list[bytes]:
+        (req,) = fslp.StreamDecoder().feed(data)
+        if req.sequence == 1:
+            held.append(data)
+            return []
+        if held:                                           # the retry: only the late reply comes back
+            out = [c for d in held for c in respond(d)]
+            held.clear()
+            port.gone_after_reply = True
+            return out
+        return list(respond(data))
+    client, port = client_for(slow)
+    port.gone_after_reply = False
+    loop_read = port.read
+
+    def read(timeout_s):
+        if port.gone_after_reply and not port._pending:    # the reply was read: now the port vanishes
+            port.gone_after_reply = False
+            port.vanish()
+        return loop_read(timeout_s)
+    port.read = read
+    assert client.call(C.GET_CAMERA_SN) == 93588           # answered; the drain stopped at the vanished port
+    assert client.stats.drained == 0 and client.stats.reopens == 0
+    assert client.call(C.GET_EXT_SYNC) is C.ExtSyncMode.DISABLE and client.stats.reopens == 1
