@@ -97,6 +97,8 @@ class CameraResult:
     error: str | None = None
     port_problem: bool = False     # the port could not be opened (missing, denied, in use): bad input
     steps: list[str] = field(default_factory=list)
+    #: the serial link over the run: requests sent, timeouts, retries, re-openings (platform_tools.boson.transaction)
+    link: dict[str, int] = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:

@@ -53,27 +53,49 @@ class Member:
 
 
 # ---------------------------------------------------------------------------- steps on one camera
+def _settled(m: Member) -> dict[str, Any] | None:
+    """What RAM holds when it is known without asking: read or verified since the last re-enumeration."""
+    return m.ram if m.ram is not None and m.client.reopens == m.reopens_seen else None
+
+
 def _set_ram(m: Member, wanted: dict[str, Any], what: str) -> None:
-    """RAM to ``wanted`` (only what differs), verified; re-applied if the camera re-enumerated."""
+    """RAM to ``wanted``: write only what differs, read back every setting written; re-applied if the
+    camera re-enumerated. No round trip is spent on what an earlier read settles: a setting not written
+    is as read just before (nothing re-enumerated since; a setter is assumed to change its own setting
+    only, as on the emulator), and a read that finds everything wanted is itself the verification."""
     keys = [k for k in m.result.before if k in wanted] or list(wanted)
-    current = m.ram if m.ram is not None else read_settings(m.client, keys)
     for attempt in range(REENUMERATION_RETRIES + 1):
-        reopens = m.client.reopens
+        if attempt:
+            m.result.warnings.append(f"the camera re-enumerated during {what}; settings applied again")
+        current = _settled(m)
+        if current is None:
+            reopens = m.client.reopens
+            current = read_settings(m.client, keys)
+            if m.client.reopens != reopens:      # a read across a reboot mixes RAM before and after it
+                m.ram = None
+                continue
+            m.ram, m.reopens_seen = current, reopens
         changes = diff(current, wanted)
-        if not changes and m.ram is not None and m.client.reopens == m.reopens_seen:
-            return                               # as last read, nothing to write, no re-enumeration since
-        if changes:
-            m.touched = True
-            apply(m.client, changes, m.result)
-        try:
-            m.ram = verify(m.client, wanted, what)
-            m.reopens_seen = m.client.reopens
+        if not changes:
             return
+        m.touched = True
+        reopens = m.client.reopens
+        apply(m.client, changes, m.result)
+        written = {k: wanted[k] for k, _, _ in changes}
+        check = written if m.client.reopens == reopens else dict(wanted)   # a reboot reloaded everything
+        try:
+            got = verify(m.client, check, what)
         except StepFailed:
             if m.client.reopens == reopens or attempt == REENUMERATION_RETRIES:
                 raise
-            m.result.warnings.append(f"the camera re-enumerated during {what}; settings applied again")
-            current = read_settings(m.client, keys)
+            m.ram = None
+            continue
+        if m.client.reopens != reopens:          # re-enumerated during the read-back itself
+            m.ram = None
+            continue
+        m.ram, m.reopens_seen = {**current, **got}, reopens
+        return
+    raise StepFailed(f"{what}: the camera kept re-enumerating")
 
 
 def _still_set(m: Member, wanted: dict[str, Any], what: str) -> bool:
@@ -88,7 +110,7 @@ def _still_set(m: Member, wanted: dict[str, Any], what: str) -> bool:
 
 
 def _read(m: Member, plan: Plan) -> None:
-    sn = m.client.call(C.GET_CAMERA_SN)
+    sn = m.client.camera_serial()      # asked once per opening: identity may have asked it already
     m.result.serial = sn
     if m.target_serial is not None and sn != m.target_serial:
         raise IdentityMismatch(f"{m.result.port} answers as SN {sn}, not SN {m.target_serial} as the rig says")
@@ -129,7 +151,8 @@ def _persist(m: Member, plan: Plan) -> None:
             break
     else:
         raise StepFailed("flash write: the camera kept re-enumerating")
-    m.ram = verify(m.client, plan.desired, "after the flash write")
+    # RAM is as verified (a flash write saves RAM, it does not change it; a re-enumeration during the
+    # write was re-applied and verified above): no read-back needed here
     m.result.persisted = True
     m.result.flash = dict(plan.desired)
     if plan.reboot_verify:
@@ -215,20 +238,36 @@ def _fail(members: list[Member], failed: list[tuple[Member, BosonError]], phase:
     per_camera([m for m in members if m.result.status != "error"], lambda m: _final_read(m, plan))
 
 
+def link_stats(client: BosonClient) -> dict[str, int]:
+    """What the run cost on a camera's serial link (this client's life: identity included)."""
+    st = client.stats
+    return {"requests": client.requests, "timeouts": st.timeouts, "retries": st.retries, "reopens": st.reopens}
+
+
 def configure_rig(members: list[Member], plan: Plan) -> list[CameraResult]:
     """Run ``plan`` on every camera as one transaction (see the module's doc); returns the results in
-    the order of ``members``. Never raises for a camera problem: it is in the results."""
+    the order of ``members``, each with its ``link`` statistics. Never raises for a camera problem: it is
+    in the results."""
+    try:
+        _transaction(members, plan)
+    finally:
+        for m in members:
+            m.result.link = link_stats(m.client)
+    return [m.result for m in members]
+
+
+def _transaction(members: list[Member], plan: Plan) -> None:
     for m in members:
         m.result.status = "pending"
     failed = _phase(members, lambda m: _read(m, plan))
     if failed:
         _fail(members, failed, "read", plan)
-        return [m.result for m in members]
+        return
     if plan.dry_run:
         for m in members:
             m.result.status = "would-change" if m.result.changes or plan.persist else "unchanged"
             m.result.after = dict(m.result.before)
-        return [m.result for m in members]
+        return
     steps: list[tuple[str, Callable[[Member], None]]] = [
         ("apply", lambda m: _set_ram(m, plan.desired, "read-back after applying"))]
     if plan.check_trigger is not None:
@@ -239,8 +278,7 @@ def configure_rig(members: list[Member], plan: Plan) -> list[CameraResult]:
         failed = _phase(members, step)
         if failed:
             _fail(members, failed, name, plan)
-            return [m.result for m in members]
+            return
     for m in members:
         m.result.status = "configured" if m.touched or m.result.persisted else "unchanged"
     per_camera(members, lambda m: _final_read(m, plan))
-    return [m.result for m in members]

@@ -48,8 +48,9 @@ def test_slave_on_both_cameras_then_idempotent(cli, pair):
     requests = left.requests
     code, doc, _ = config(cli, "--slave")
     assert code == 0 and all(c["status"] == "unchanged" and c["changes"] == [] for c in doc["cameras"])
-    # identity, serial, then sync mode, telemetry location, packing and state (that read is the final state)
-    assert left.requests - requests == 1 + 1 + 4
+    # the serial (identity, asked once), then sync mode, telemetry location, packing and state: that read
+    # finds nothing to change, so it is both the verification and the final state
+    assert left.requests - requests == 1 + 4
     assert all(c["flash"] is None for c in doc["cameras"])        # slave, not persisted: flash not read
 
 
@@ -191,9 +192,9 @@ def test_reboot_in_the_middle_of_the_set_command(cli, pair):
 def test_reboot_after_apply_loses_ram_and_is_reapplied(cli, pair):
     left, _ = pair
     # reboot while reading back: RAM reloads from flash (DISABLE); the tool notices and applies again.
-    # Request 10 is the read-back: identity, serial, 4 reads, set sync, telemetry location, telemetry state
-    # (packing is already the default) = 9 requests, then the first read-back.
-    left.faults = parse_faults(f"reboot:fid=0x{C.GET_EXT_SYNC.function_id:08X}:n=10")
+    # Request 9 is the read-back: the serial (identity, asked once), 4 reads, set sync, telemetry location,
+    # telemetry state (packing is already the default) = 8 requests, then the first read-back.
+    left.faults = parse_faults(f"reboot:fid=0x{C.GET_EXT_SYNC.function_id:08X}:n=9")
     code, doc, err = config(cli, "--slave")
     assert code == 0, err
     cam = by_label(doc)["left"]

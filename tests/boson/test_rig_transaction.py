@@ -37,7 +37,9 @@ FAULTS = {
 REBOOTS = {
     "read": f"reboot:fid={fid(C.GET_TELEMETRY_LOCATION)}:times=1",
     "apply": f"reboot:fid={fid(C.SET_TELEMETRY_LOCATION)}:times=1",
-    "verify": f"reboot:fid={fid(C.GET_TELEMETRY)}:n=19",     # request 19: the read-back after applying
+    # request 17: the read-back after applying (identity 1, RAM 2-5, reboot 6, serial 7, flash 8-11,
+    # three writes 12-14, their read-backs 15-17)
+    "verify": f"reboot:fid={fid(C.GET_TELEMETRY)}:n=17",
     "trigger check": f"reboot:fid={fid(C.GET_FRAME_COUNT)}:times=1",
     "persist": f"reboot:fid={fid(C.WRITE_FLASH)}:times=1",
 }
@@ -60,6 +62,7 @@ def start_pair(make_boson, trigger):
 def run_config(cli):
     code, out, err = cli("boson-config", *RIG_SERIALS, *FAST, "--json", "--slave", "--check-trigger",
                          "--check-seconds", "0.2", "--persist")
+    assert out.strip(), f"exit {code}, no JSON: {err}"
     return code, json.loads(out), err
 
 
