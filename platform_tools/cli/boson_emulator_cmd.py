@@ -30,13 +30,17 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "simulated trigger, SIGUSR2 stops it), for --duration, or while --run runs.",
                        epilog="Faults: KIND[:p=P][:n=N][:fid=0xID][:times=K], comma-separated; kinds: "
                               + ", ".join(KINDS) + ". Exit codes: 0 served until stopped; with --run, the exit "
-                              "code of the command run; 2 bad input (--serial, --faults, --boot-seconds, the rig).")
+                              "code of the command run; 2 bad input (--serial, --faults, --faults-on, "
+                              "--boot-seconds, the rig).")
     p.add_argument("--serial", type=int, action="append", metavar="N",
                    help="camera serial number (repeat for several cameras; default: the serials set in "
                         "sensors.thermal.left.serial / .right.serial)")
     p.add_argument("--by-id-dir", metavar="DIR",
                    help=f"where to publish the by-id links (default: ${discovery.BY_ID_ENV} or a new temp folder)")
-    p.add_argument("--faults", action="append", default=[], metavar="RULES", help="fault rules (see below)")
+    p.add_argument("--faults", action="append", default=[], metavar="RULES",
+                   help="fault rules of every camera (see below)")
+    p.add_argument("--faults-on", action="append", default=[], metavar="SN=RULES",
+                   help="fault rules of the camera with this serial only, e.g. 93589=delay:s=1.5 (repeatable)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the faults")
     p.add_argument("--boot-seconds", type=float, default=0.5, metavar="S", help="simulated boot time (default 0.5)")
     p.add_argument("--trigger", action="store_true", help="start with the simulated trigger running")
@@ -66,6 +70,23 @@ def _serials(args, rig) -> list[int]:
     return serials
 
 
+def _faults_on(texts: list[str], serials: list[int]) -> dict[int, list]:
+    """--faults-on SN=RULES, each for one of the emulated serials."""
+    out: dict[int, list] = {}
+    for text in texts:
+        sn, sep, rules = text.partition("=")
+        if not sep or not sn.strip().isdigit():
+            raise UserError(f"--faults-on {text!r}: expected SN=RULES, e.g. {serials[0]}=delay:s=1.5")
+        if int(sn) not in serials:
+            raise UserError(f"--faults-on {text!r}: SN {sn} is not emulated (--serial: "
+                            + ", ".join(map(str, serials)) + ")")
+        try:
+            out.setdefault(int(sn), []).extend(parse_faults(rules))
+        except ValueError as exc:
+            raise UserError(f"--faults-on {text!r}: {exc}") from None
+    return out
+
+
 def cmd_emulator(args) -> int:
     rig = rig_from_args(args)
     try:
@@ -73,6 +94,7 @@ def cmd_emulator(args) -> int:
     except ValueError as exc:
         raise UserError(f"--faults: {exc}") from None
     serials = _serials(args, rig)
+    faults_for = _faults_on(args.faults_on, serials)
     if args.boot_seconds < 0:
         raise UserError("--boot-seconds must be >= 0")
     if args.session_out and not args.run:
@@ -84,7 +106,7 @@ def cmd_emulator(args) -> int:
         log = stack.enter_context(open(log_path, "w")) if log_path else None
         fleet = stack.enter_context(Fleet(serials, trigger=trigger, by_id_dir=args.by_id_dir, faults=faults,
                                           seed=args.seed, boot_s=args.boot_seconds,
-                                          persist_slave=args.persist_slave, log=log))
+                                          persist_slave=args.persist_slave, log=log, faults_for=faults_for))
         if args.run:
             return _run_session(args, fleet.by_id_dir, fleet.devices, stage)
         _serve_forever(args, fleet.cameras, trigger, fleet.by_id_dir, fleet.devices)

@@ -169,6 +169,23 @@ def test_emulator_bad_faults(cli):
     assert code == 2 and "unknown fault" in err
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("spec, says", [("93589", "expected SN=RULES"), ("777=delay", "SN 777 is not emulated"),
+                                        ("93589=explode", "unknown fault")])
+def test_emulator_bad_faults_on_one_camera(cli, spec, says):
+    code, _, err = cli("boson-emulator", "--serial", str(LEFT), "--serial", str(RIGHT), "--faults-on", spec)
+    assert code == 2 and f"--faults-on {spec!r}" in err and says in err
+
+
+def test_faults_on_one_camera_reach_that_camera_only(tmp_path):
+    from platform_tools.boson.emulator import Trigger
+    from platform_tools.boson.emulator.fleet import Fleet
+    with Fleet([LEFT, RIGHT], trigger=Trigger(30.0), by_id_dir=tmp_path, faults=parse_faults("split"),
+               faults_for={RIGHT: parse_faults("delay:s=1.5")}) as fleet:
+        kinds = {e.serial: [f.kind for f in e.faults] for e in fleet.cameras}
+    assert kinds == {LEFT: ["split"], RIGHT: ["split", "delay"]}
+
+
 @pytest.mark.parametrize("fid", sorted(C.FLASH_OR_REBOOT))
 def test_raw_refuses_flash_and_reboot_without_yes(cli, make_boson, fid):
     emu = make_boson(LEFT)

@@ -12,7 +12,7 @@ import shutil
 import tempfile
 import threading
 from pathlib import Path
-from typing import Sequence, TextIO
+from typing import Mapping, Sequence, TextIO
 
 from .. import commands as C
 from ..discovery import BY_ID_ENV
@@ -25,15 +25,18 @@ from .trigger import Trigger
 class Fleet:
     """Emulated Bosons for ``serials``. ``by_id_dir``: where the by-id links go (default:
     $PLATFORM_TOOLS_BOSON_BY_ID, else a new temporary folder, removed on exit). Each camera gets its
-    own copy of ``faults`` and the random seed ``seed + its index``; ``persist_slave`` starts them as
-    if slave mode had been written to flash; ``boot_s`` is the simulated boot time in seconds."""
+    own copy of ``faults`` (and of ``faults_for[its serial]``, faults of that camera only) and the random
+    seed ``seed + its index``; ``persist_slave`` starts them as if slave mode had been written to flash;
+    ``boot_s`` is the simulated boot time in seconds."""
 
     def __init__(self, serials: Sequence[int], *, trigger: Trigger, by_id_dir: str | Path | None = None,
                  faults: Sequence[FaultRule] = (), seed: int = 0, boot_s: float = 0.5,
-                 persist_slave: bool = False, log: TextIO | None = None):
+                 persist_slave: bool = False, log: TextIO | None = None,
+                 faults_for: Mapping[int, Sequence[FaultRule]] | None = None):
         self.serials = list(serials)
         self.trigger = trigger
         self.faults = list(faults)
+        self.faults_for = {sn: list(rules) for sn, rules in (faults_for or {}).items()}
         self.seed, self.boot_s, self.persist_slave, self.log = seed, boot_s, persist_slave, log
         self._temp_dir: str | None = None
         by_id = by_id_dir or os.environ.get(BY_ID_ENV)
@@ -49,7 +52,8 @@ class Fleet:
             if self.persist_slave:
                 state.flash["ext_sync_mode"] = state.settings["ext_sync_mode"] = int(C.ExtSyncMode.SLAVE)
             self.cameras.append(EmulatedBoson(state, by_id_dir=self.by_id_dir,
-                                              faults=[parse_faults(f.spec())[0] for f in self.faults],
+                                              faults=[parse_faults(f.spec())[0] for f in
+                                                      self.faults + self.faults_for.get(sn, [])],
                                               boot_s=self.boot_s, seed=self.seed + i, log=self.log,
                                               log_lock=lock).start())
         return self
