@@ -1,17 +1,29 @@
-"""The Boson part of the pre-flight, through the Boson tooling (platform_tools.boson): each camera
-answers on its serial port with the expected serial number, its frame counter advances at the
-trigger rate, its external sync mode is the configured one, and its telemetry rows (where the FFC
-status is read from) are on when the rig records them, at the location the FFC decoder reads them from
+"""The Boson part of the pre-flight, through the Boson tooling (platform_tools.boson).
+
+Which camera is which is asked of the cameras (platform_tools.boson.identity): every serial port that may
+hold a Boson (the by-id links, the port list, and the rig's udev names ``/dev/<device_name>_serial``) is
+asked its serial number over the serial link, and left / right are mapped by that answer, not by the udev
+name (the udev rules match the USB serial string, which this project could not check equals the camera's
+serial). The "thermal cameras" check fails on a rig serial not set, a rig camera no port answers as
+(missing), one serial on two ports (duplicate), a rig camera on a port whose USB string names another
+camera (swapped), and a udev name that leads to another camera than its side's; it says which port and
+which physical USB port (by-path) holds each camera, and names any camera the rig does not know.
+
+Then, on each identified camera at once: its frame counter advances at the trigger rate, its external
+sync mode is the configured one, and its telemetry rows (where the FFC status is read from) are on when
+the rig records them, at the location the FFC decoder reads them from
 (platform_tools.boson.telemetry.EXPECTED_LOCATION): rows at the top while the decoder reads the bottom
 give every frame of a recording a wrong FFC status."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-from platform_tools.boson import discovery
+from platform_tools.boson import discovery, identity
+from platform_tools.boson.client import BosonClient
 from platform_tools.boson.codes import BosonError
-from platform_tools.boson.discovery import Target
-from platform_tools.boson.operations import measure_frame_rate, open_client, read_info
+from platform_tools.boson.discovery import Found, Target
+from platform_tools.boson.operations import ClientPool, measure_frame_rate, per_camera, read_info
 from platform_tools.boson.syncsetup import SYNC_MODES
 from platform_tools.boson.telemetry import EXPECTED_LOCATION
 from platform_tools.rig import Rig
@@ -21,48 +33,104 @@ from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
 TRIGGER_TOLERANCE = 0.2
 #: what the pre-flight reads of each camera (platform_tools.boson.operations.INFO)
 PROBE_KEYS = ("serial", "firmware", "sync_mode", "telemetry", "telemetry_location")
+SIDES = ("left", "right")
 
 
-def _target(rig: Rig, side: str, dev_dir: Path, found: list[discovery.Found]) -> Target:
-    """The udev name when it exists (on the Orin, in the container), else the by-id discovery."""
-    udev = dev_dir / rig.boson_device_nodes(side)["serial"]
-    if udev.exists():
-        return Target(side, str(udev), getattr(rig.desc.sensors.thermal, side).serial)
-    return discovery.select_targets(side, rig, found)[0]
+def candidate_ports(rig: Rig, dev_dir: Path, found: list[Found]) -> tuple[list[Found], dict[str, str]]:
+    """Every serial port that may hold a Boson, one per device: what discovery found, and the rig's udev
+    names (``dev_dir/<device_name>_serial``) that lead to a device discovery did not see; and side -> the
+    device its udev name leads to (only the names that exist)."""
+    ports = [f for f in found if f.source != "usb"]
+    devices = {f.device for f in ports}
+    udev: dict[str, str] = {}
+    for side in SIDES:
+        name = dev_dir / rig.boson_device_nodes(side)["serial"]
+        try:
+            device = os.path.realpath(name) if os.path.exists(name) else None
+        except OSError:
+            device = None
+        if device is None:
+            continue
+        udev[side] = device
+        if device not in devices:
+            ports.append(Found(None, str(name), device, None, "udev", discovery.by_path_for(device)))
+            devices.add(device)
+    return ports, udev
 
 
-def probe(target: Target, window_s: float) -> dict:
-    """serial, firmware, port, sync_mode, telemetry and frame_rate_hz (over ``window_s`` s) of one
-    camera; raises SelectionError when it answers with another serial number than the rig's."""
-    with open_client(target) as client:
-        info = read_info(client, PROBE_KEYS)
-        if target.serial is not None and info["serial"] != target.serial:
-            raise discovery.SelectionError(f"{target.port} answers with SN {info['serial']}, the rig expects "
-                                           f"{target.serial} (sensors.thermal.{target.label}.serial)")
-        rate = measure_frame_rate(client, window_s)
-    return {"serial": info["serial"], "firmware": info["firmware"], "port": target.port,
+def _udev_problems(rig: Rig, udev: dict[str, str], known: identity.RigSurvey,
+                   identified: list[identity.Identified]) -> list[str]:
+    """A udev name that leads to another camera than its side's (the rules match the USB string)."""
+    answered = {i.found.device: i for i in identified}
+    out = []
+    for side, device in udev.items():
+        name = rig.boson_device_nodes(side)["serial"]
+        mine = known.cameras.get(side)
+        if mine is not None and mine.found.device == device:
+            continue
+        there = answered.get(device)
+        said = (f"the camera answering SN {there.serial}" if there is not None and there.serial is not None
+                else "a port that does not answer")
+        out.append(f"udev name {name} leads to {said}, not to the {side} camera "
+                   f"(sensors.thermal.{side}.serial): the udev rules match the USB serial string")
+    return out
+
+
+def probe(client: BosonClient, found: Found, window_s: float) -> dict:
+    """serial, firmware, port, by_path, sync_mode, telemetry, telemetry_location and frame_rate_hz (over
+    ``window_s`` s) of one identified camera (its serial is the one identity read: not asked again)."""
+    info = read_info(client, PROBE_KEYS)
+    rate = measure_frame_rate(client, window_s)
+    return {"serial": info["serial"], "firmware": info["firmware"], "port": found.port, "by_path": found.by_path,
             "sync_mode": str(info["sync_mode"]), "telemetry": str(info["telemetry"]),
-            "telemetry_location": str(info["telemetry_location"]),
-            "frame_rate_hz": round(rate, 2)}
+            "telemetry_location": str(info["telemetry_location"]), "frame_rate_hz": round(rate, 2)}
+
+
+def _identity_check(known: identity.RigSurvey, problems: list[str], cameras: dict) -> Check:
+    where = ", ".join(f"{s} SN {c['serial']} fw {c['firmware']} on {known.cameras[s].found.where()}"
+                      for s, c in cameras.items())
+    notes = "".join(f"; note: {n}" for n in known.notes)
+    if problems:
+        return Check("thermal cameras", FAILED, "; ".join(problems) + (f"; {where}" if where else "") + notes)
+    return Check("thermal cameras", OK, where + " (identified by the serial each answers)" + notes)
 
 
 def checks(rig: Rig, dev_dir: Path, cameras: dict) -> list[Check]:
-    """The thermal cameras, trigger, sync mode and telemetry checks; fills ``cameras`` (side -> probe)."""
-    found = discovery.discover()
-    problems, sync_bad, trig_bad, telemetry_bad = [], [], [], []
+    """The thermal cameras (identity), trigger, sync mode and telemetry checks; fills ``cameras`` (side ->
+    probe)."""
+    ports, udev = candidate_ports(rig, dev_dir, discovery.discover())
+    with ClientPool() as pool:
+        identified = identity.identify(ports, pool.open, per_camera)
+        known = identity.survey(rig, identified, ports)
+        problems = known.problems + _udev_problems(rig, udev, known, identified)
+        sides = [s for s in SIDES if s in known.cameras]
+
+        def one(side: str):
+            i = known.cameras[side]
+            try:
+                return probe(pool.open(Target(side, i.found.port, i.serial, i.found.video)), i.found,
+                             rig.desc.on_device.trigger_watch_s)
+            except (BosonError, OSError) as exc:
+                return f"{side}: {exc}"
+            except Exception as exc:  # noqa: BLE001  a camera that misbehaves is a failed check, not a crash
+                return f"{side}: {type(exc).__name__}: {exc}"
+        for side, info in zip(sides, per_camera(sides, one)):
+            if isinstance(info, str):
+                problems.append(info)
+            else:
+                cameras[side] = info
+    out = [_identity_check(known, problems, cameras)]
+    if not cameras:
+        return out + [Check(n, SKIPPED, "no camera answered") for n in ("trigger", "sync mode", "telemetry")]
+    return out + _state_checks(rig, cameras)
+
+
+def _state_checks(rig: Rig, cameras: dict) -> list[Check]:
+    sync_bad, trig_bad, telemetry_bad = [], [], []
     want_telemetry = rig.desc.on_device.thermal_telemetry_rows > 0
     rate = rig.desc.sync.rate_hz
     want_mode = SYNC_MODES[rig.desc.sync.boson_mode].name
-    for side in ("left", "right"):
-        try:
-            info = probe(_target(rig, side, dev_dir, found), rig.desc.on_device.trigger_watch_s)
-        except (discovery.SelectionError, BosonError, OSError) as exc:
-            problems.append(f"{side}: {exc}")
-            continue
-        except Exception as exc:  # noqa: BLE001  a camera that does not answer is a failed check, not a crash
-            problems.append(f"{side}: {type(exc).__name__}: {exc}")
-            continue
-        cameras[side] = info
+    for side, info in cameras.items():
         if not info["sync_mode"].upper().endswith(want_mode):
             sync_bad.append(f"{side} is {info['sync_mode']}")
         if want_telemetry and info["telemetry"] != "enabled":
@@ -72,15 +140,10 @@ def checks(rig: Rig, dev_dir: Path, cameras: dict) -> list[Check]:
                                  f"the {EXPECTED_LOCATION}")
         if abs(info["frame_rate_hz"] - rate) > TRIGGER_TOLERANCE * rate:
             trig_bad.append(f"{side} at {info['frame_rate_hz']:.1f} Hz")
-    out = [Check("thermal cameras", FAILED if problems else OK,
-                 "; ".join(problems) if problems else
-                 ", ".join(f"{s} SN {c['serial']} fw {c['firmware']}" for s, c in cameras.items()))]
-    if not cameras:
-        return out + [Check(n, SKIPPED, "no camera answered") for n in ("trigger", "sync mode", "telemetry")]
-    out.append(Check("trigger", FAILED if trig_bad else OK,
-                     (f"frame counters: {', '.join(trig_bad)}, expected {rate:g} Hz (sync.rate_hz): is the "
-                      f"{rig.desc.sync.source_part} trigger running and wired?") if trig_bad else
-                     f"frame counters advance at {rate:g} Hz"))
+    out = [Check("trigger", FAILED if trig_bad else OK,
+                 (f"frame counters: {', '.join(trig_bad)}, expected {rate:g} Hz (sync.rate_hz): is the "
+                  f"{rig.desc.sync.source_part} trigger running and wired?") if trig_bad else
+                 f"frame counters advance at {rate:g} Hz")]
     out.append(Check("sync mode", FAILED if sync_bad else OK,
                      f"{', '.join(sync_bad)}, expected {want_mode} (sync.boson_mode): run "
                      f"`platform_tools boson-config`" if sync_bad else f"{want_mode} as configured"))

@@ -6,7 +6,9 @@ Sources, merged by serial number:
 - pyserial's port list, filtered on USB 09CB:4007 (ports udev gave no by-id link);
 - pyusb, also filtered on 09CB:4007: a camera on the bus whose serial port is missing (driver,
   permissions) is reported so the user knows it is there;
-- the video device from ``/dev/v4l/by-id`` (or ``$PLATFORM_TOOLS_BOSON_V4L_BY_ID``).
+- the video device from ``/dev/v4l/by-id`` (or ``$PLATFORM_TOOLS_BOSON_V4L_BY_ID``);
+- the physical USB port from ``/dev/serial/by-path`` (or ``$PLATFORM_TOOLS_BOSON_BY_PATH``): the link
+  there that leads to the same device, so a report can say which socket holds which camera.
 """
 from __future__ import annotations
 
@@ -21,6 +23,7 @@ log = logging.getLogger(__name__)
 USB_VID, USB_PID = 0x09CB, 0x4007
 BY_ID_ENV = "PLATFORM_TOOLS_BOSON_BY_ID"
 V4L_ENV = "PLATFORM_TOOLS_BOSON_V4L_BY_ID"
+BY_PATH_ENV = "PLATFORM_TOOLS_BOSON_BY_PATH"
 _SERIAL_LINK = re.compile(r"^usb-FLIR_Boson_(.+)-if0?0$")   # the USB serial string: digits, or not
 _VIDEO_LINK = "usb-FLIR_Boson_{sn}-video-index0"
 
@@ -33,13 +36,31 @@ def v4l_dir() -> Path:
     return Path(os.environ.get(V4L_ENV) or "/dev/v4l/by-id")
 
 
+def by_path_dir() -> Path:
+    return Path(os.environ.get(BY_PATH_ENV) or "/dev/serial/by-path")
+
+
+def by_path_for(device: str) -> str | None:
+    """The /dev/serial/by-path link (the physical USB port) that leads to ``device``, if any."""
+    folder = by_path_dir()
+    try:
+        names = sorted(os.listdir(folder))
+    except OSError:
+        return None
+    for name in names:
+        if device and _target(folder / name) == device:
+            return str(folder / name)
+    return None
+
+
 @dataclass(frozen=True)
 class Found:
     serial: int | None      # the USB serial string (by-id name), if numeric: a hint; identity.py asks the camera
     port: str               # the name to open: the by-id link when there is one
     device: str             # what it resolves to (/dev/ttyACM0, /dev/pts/5)
     video: str | None       # /dev/videoN, when its by-id link exists
-    source: str             # "by-id", "port-list" or "usb" (on the bus, no serial port)
+    source: str             # "by-id", "port-list", "udev" (a rig's udev name) or "usb" (on the bus, no serial port)
+    by_path: str | None = None   # the /dev/serial/by-path link: which physical USB port
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -47,6 +68,10 @@ class Found:
     def describe(self) -> str:
         sn = f"SN {self.serial}" if self.serial is not None else "SN unknown"
         return f"{sn} at {self.port}" + (f" (no serial port: {self.source})" if self.source == "usb" else "")
+
+    def where(self) -> str:
+        """The port, and the physical USB port behind it when known."""
+        return self.port + (f" (USB port {Path(self.by_path).name})" if self.by_path else "")
 
 
 def _target(link) -> str | None:
@@ -81,7 +106,7 @@ def _from_by_id() -> list[Found]:
         if target is None:             # dangling: the camera is re-enumerating
             continue
         sn = int(m.group(1)) if m.group(1).isdigit() else None
-        out.append(Found(sn, str(link), target, _video_for(sn), "by-id"))
+        out.append(Found(sn, str(link), target, _video_for(sn), "by-id", by_path_for(target)))
     return out
 
 
@@ -97,7 +122,8 @@ def _from_port_list() -> list[Found]:
         if (p.vid, p.pid) != (USB_VID, USB_PID):
             continue
         sn = int(p.serial_number) if p.serial_number and p.serial_number.isdigit() else None
-        out.append(Found(sn, p.device, os.path.realpath(p.device), _video_for(sn), "port-list"))
+        device = os.path.realpath(p.device)
+        out.append(Found(sn, p.device, device, _video_for(sn), "port-list", by_path_for(device)))
     return out
 
 
