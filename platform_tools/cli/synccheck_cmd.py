@@ -14,10 +14,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sync-check", help="sync analysis of a recording: drops, FFC, pairing residuals, verdict",
                        description="Per stream: frame intervals, drops (interval above "
                                    "processing.sync_limits.drop_interval_factor x the nominal period) and the "
-                                   "jitter; FFC periods; clock steps of the host; pairing residuals of the thermal "
-                                   "pair and of the ZED left with each thermal camera (mean, std, p99, max), their "
-                                   "constant offset and drift in ppm. Pass/fail against processing.sync_limits "
-                                   "(change them with --set processing.sync_limits.KEY=VALUE). Exit 1 on fail.")
+                                   "jitter; FFC periods; clock steps of the host; which trigger pulse exposed "
+                                   "every thermal frame (its offset after the ZED, uncertainty and evidence: the "
+                                   "stated latency, trigger gaps, the Boson frame counter, continuity across a "
+                                   "step); the jitter and drift (ppm) of the frames of one trigger, clock steps "
+                                   "taken out. Pass/fail against processing.sync_limits (change them with --set "
+                                   "processing.sync_limits.KEY=VALUE). Exit 0 pass, 1 a check failed (an "
+                                   "ambiguous trigger included), 2 bad input.")
     p.add_argument("recording", metavar="RECORDING", type=Path,
                    help="a rosbag2 folder, a folder holding one (simulate-rig's DIR), or an .mcap file")
     p.add_argument("--plots", metavar="DIR", type=Path, help="write SVG plots (interval histograms, residuals "
@@ -115,15 +118,20 @@ def cmd_sync_check(args: argparse.Namespace) -> int:
             for g in tr.get("segments", []):
                 print(f"trigger {cam} frames {g['frames'][0]}..{g['frames'][1]}: {g['offset_ms']:.2f} "
                       f"+- {g['uncertainty_ms']:.2f} ms after the ZED's trigger ({g['established_by']})")
-        print("nearest-stamp residuals (not the pairing: the export pairs by trigger, above)")
-        print(f"{'pair':<28} {'n':>5} {'mean':>7} {'std':>6} {'p99':>7} {'max':>7} {'offset':>7} {'jit99':>6} "
-              f"{'ppm':>7}")
-        for name, p in report["pairs"].items():
-            r = p["residual_ms"] or {}
-            print(f"{name:<28} {p['pairs']:>5} {_fmt(r.get('mean')):>7} {_fmt(r.get('std')):>6} "
-                  f"{_fmt(r.get('p99')):>7} {_fmt(r.get('max')):>7} {_fmt(p['offset_ms']):>7} "
-                  f"{_fmt(p['jitter_p99_ms']):>6} {_fmt(p['drift_ppm'], '.1f'):>7} "
-                  f"+- {_fmt(p.get('drift_stderr_ppm'), '.1f')}")
+        by_trigger = report.get("pairs_by_trigger") or {}
+        if by_trigger:
+            print("frames of the same trigger pulse (each stream's clock steps taken out):")
+            print(f"{'pair':<28} {'n':>5} {'segments':>8} {'jitter p99 ms':>13} {'drift ppm':>18}")
+            for name, p in by_trigger.items():
+                print(f"{name:<28} {p['pairs']:>5} {p.get('segments', '-'):>8} {_fmt(p['jitter_p99_ms'], '.3f'):>13} "
+                      f"{_fmt(p['drift_ppm'], '.1f'):>9} +- {_fmt(p['drift_stderr_ppm'], '.1f'):<6}")
+        else:     # no trigger assignment: only the nearest-stamp statistics (an offset over half a period aliases)
+            print("nearest-stamp residuals (the trigger of each frame is not established: no pairing)")
+            print(f"{'pair':<28} {'n':>5} {'std':>6} {'p99':>7} {'jit99':>6} {'ppm':>7}")
+            for name, p in report["pairs"].items():
+                r = p["residual_ms"] or {}
+                print(f"{name:<28} {p['pairs']:>5} {_fmt(r.get('std')):>6} {_fmt(r.get('p99')):>7} "
+                      f"{_fmt(p['jitter_p99_ms']):>6} {_fmt(p['drift_ppm'], '.1f'):>7}")
         for c in report["checks"]:
             if not c["ok"]:
                 print(f"FAIL {c['check']}: {c['value']} {c['unit']} (limit {c['limit']})")

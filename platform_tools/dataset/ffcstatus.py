@@ -10,8 +10,16 @@ Two message types are read (the released TartanRGBT stack does not publish which
 
 Any other type is refused (:class:`StatusTypeError`, one line); a recording without status messages falls back
 to the Boson telemetry rows, then to frozen frames (:mod:`.recording`, :mod:`.sync`).
+
+**The FFC freeze as evidence of the status's frame**: a status stamped by a frame may belong to another one (a Bool
+logged before its image reaches the recorder is stamped with the frame before; a camera's telemetry may flag the
+FFC a frame before its image freezes). The freeze (frames whose image repeats, a known span) is in the frames
+themselves: :func:`frame_lag` finds the shift of the in-progress rows that lays them on it, :func:`shifted` applies
+it. (The ZED does not see an FFC: the freeze says nothing of a Boson's trigger offset against the ZED.)
 """
 from __future__ import annotations
+
+import numpy as np
 
 BOOL = "std_msgs/msg/Bool"
 DIAGNOSTIC = "diagnostic_msgs/msg/DiagnosticArray"
@@ -53,4 +61,86 @@ def rows(type_name: str, msg, log_ns: int, last_frame_stamp: int | None) -> list
                 out.append((stamp, int(values["ffc_status"])))
             except ValueError:
                 continue
+    return out
+
+
+#: how many triggers a status stream may be offset from its frames and still be realigned by an FFC freeze
+MAX_LAG_FRAMES = 3
+#: frames in a row whose image repeats: an FFC freeze (noise never repeats exactly)
+MIN_FREEZE_FRAMES = 3
+#: the realigned status must cover the freeze at least this well (intersection over union of the frames)
+MIN_AGREEMENT = 0.8
+
+
+def freeze_runs(frozen) -> np.ndarray:
+    """Per frame (recording order): part of a run of at least MIN_FREEZE_FRAMES frames whose image repeats."""
+    f = np.asarray(frozen, bool)
+    out = np.zeros(len(f), bool)
+    i = 0
+    while i < len(f):
+        j = i
+        while j < len(f) and f[j]:
+            j += 1
+        if j - i >= MIN_FREEZE_FRAMES:
+            out[i:j] = True
+        i = max(j, i + 1)
+    return out
+
+
+def trigger_index(stamps, counter, period_ns: float) -> np.ndarray:
+    """Each frame's trigger count since the first (recording order): from the Boson frame counter when the frames
+    carry it, else from the stamps' intervals."""
+    from . import counters
+    t = np.asarray(stamps, np.int64)
+    if counter is not None:
+        return counters.pulse_grid_index(t, counter, period_ns)
+    return np.concatenate([[0], np.cumsum(np.maximum(1, np.round(np.diff(t) / period_ns).astype(np.int64)))])
+
+
+def frame_lag(rows: list[tuple[int, int]], frame_stamps, frozen, index) -> int:
+    """How many triggers the FFC-in-progress rows of a status stream stamped by its frames (this project's node, a
+    Bool stamped by the frame logged before it, the telemetry rows) must move later to lie on the frozen frames:
+    an FFC freezes the image for a known span, and that span is in the frames. ``index``: each frame's trigger
+    count (:func:`trigger_index`). 0 when there is no freeze, the rows are not on frame stamps, or no lag fits
+    clearly better than none."""
+    t = np.asarray(frame_stamps, np.int64)
+    runs = freeze_runs(frozen)
+    if not rows or not runs.any() or len(t) == 0:
+        return 0
+    pos = {int(s): i for i, s in enumerate(t)}
+    on = [(pos.get(int(s)), v) for s, v in rows]
+    if sum(i is None for i, _ in on) > max(2, len(on) // 100):
+        return 0                                    # stamped on its own clock: not a frame's status
+    idx = np.asarray(index, np.int64)
+    recorded = set(idx.tolist())
+    frozen_k = set(idx[runs].tolist())
+    flagged = {int(idx[i]) for i, v in on if i is not None and v == 2}
+    if not flagged:
+        return 0
+
+    def agreement(lag: int) -> float:
+        s = {k + lag for k in flagged} & recorded   # what the freeze can confirm: recorded frames only
+        return len(s & frozen_k) / max(len(s | frozen_k), 1)
+
+    scores = {lag: agreement(lag) for lag in range(-MAX_LAG_FRAMES, MAX_LAG_FRAMES + 1)}
+    best = max(scores, key=lambda lag: (scores[lag], -abs(lag)))
+    return best if best != 0 and scores[best] > scores[0] and scores[best] >= MIN_AGREEMENT else 0
+
+
+def shifted(rows: list[tuple[int, int]], frame_stamps, lag: int, index) -> list[tuple[int, int]]:
+    """The rows moved ``lag`` triggers later: each takes the stamp of the frame of that trigger, and is dropped
+    when that frame was not recorded; rows not on a frame are left as they are."""
+    if lag == 0:
+        return rows
+    t = np.asarray(frame_stamps, np.int64)
+    idx = np.asarray(index, np.int64)
+    pos = {int(s): i for i, s in enumerate(t)}
+    frame_of = {int(k): i for i, k in enumerate(idx)}
+    out = []
+    for s, v in rows:
+        i = pos.get(int(s))
+        if i is None:
+            out.append((s, v))
+        elif int(idx[i]) + lag in frame_of:
+            out.append((int(t[frame_of[int(idx[i]) + lag]]), v))
     return out

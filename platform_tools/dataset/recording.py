@@ -50,6 +50,8 @@ class Stream:
     log_ns: np.ndarray               # int64
     file_index: np.ndarray           # int16: which MCAP file
     frozen: np.ndarray | None = None  # thermal: same pixels as the previous frame
+    #: thermal: the Boson telemetry frame counter of each frame (int64), None without telemetry rows
+    counter: np.ndarray | None = None
 
 
 @dataclass
@@ -64,6 +66,8 @@ class Recording:
     #: thermal camera -> "status" (the status topic), "telemetry" (the frames' telemetry rows) or None
     status_source: dict[str, str | None] = field(default_factory=dict)
     recovered: list[str] = field(default_factory=list)
+    #: thermal camera -> triggers its status rows were moved later to lie on the FFC freeze (ffcstatus.frame_lag)
+    status_lag_frames: dict[str, int] = field(default_factory=dict)
     #: the topic layout (layout.Layout.name): "project", "tartanrgbt" or a topic map's path
     layout: str = "project"
     #: camera (zed_left, zed_right, thermal_left, thermal_right) -> its latest sensor_msgs/CameraInfo, as
@@ -304,14 +308,14 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
                 for schema, channel, msg in reader.iter_messages(topics=wanted, log_time_order=True):
                     s = by_topic.get(channel.topic)
                     if s is not None:
-                        frozen = False
+                        frozen, counter = False, -1
                         stamp = header_stamp(msg.data)
                         if s.startswith("thermal"):
-                            tail = _thermal_tail(msg.data, s, stamp, rig, tele_rows, from_telemetry)
+                            tail, counter = _thermal_tail(msg.data, s, stamp, rig, tele_rows, from_telemetry)
                             frozen = tails.get(s) == tail
                             tails[s] = tail
                             last_stamp[s] = stamp
-                        cols[s].append((stamp, msg.log_time, fi, frozen))
+                        cols[s].append((stamp, msg.log_time, fi, frozen, counter))
                         continue
                     dec = decoders.get((fi, schema.id))
                     if dec is None:
@@ -333,35 +337,47 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
             status[cam], source[cam] = from_telemetry[cam], "telemetry"
         else:
             status[cam], source[cam] = [], None
-    out = {}
+    out, lag = {}, {}
     for s, rows in cols.items():
-        a = np.array(rows, dtype=np.int64).reshape(-1, 4)
+        a = np.array(rows, dtype=np.int64).reshape(-1, 5)
+        thermal = s.startswith("thermal")
         out[s] = Stream(s, topics[s], a[:, 0], a[:, 1], a[:, 2].astype(np.int16),
-                        a[:, 3].astype(bool) if s.startswith("thermal") else None)
+                        a[:, 3].astype(bool) if thermal else None,
+                        a[:, 4] if thermal and len(a) and (a[:, 4] >= 0).all() else None)
+    for cam in from_telemetry:     # the FFC freeze in the frames says which frame each status row belongs to
+        if cam in out and status[cam]:
+            st = out[cam]
+            k = ffcstatus.trigger_index(st.stamp_ns, st.counter, 1e9 / rig.desc.sync.rate_hz)
+            lag[cam] = ffcstatus.frame_lag(status[cam], st.stamp_ns, st.frozen, k)
+            status[cam] = ffcstatus.shifted(status[cam], st.stamp_ns, lag[cam], k)
     rec = Recording(name, Path(path), files, out, status, status_source=source, recovered=notes,
-                    layout=lay.name, camera_info=infos)
+                    layout=lay.name, camera_info=infos, status_lag_frames=lag)
     rec._topics = dict(topics)          # every topic of the layout (streams, status, camera_info)
     return rec
 
 
-def _thermal_tail(data: bytes, stream: str, stamp: int, rig, tele_rows: dict, from_telemetry: dict) -> bytes:
-    """The last 4 KiB of a thermal frame's image rows (to find frozen frames), after recording the
-    FFC state of its telemetry rows, when it has some, in ``from_telemetry``."""
+def _thermal_tail(data: bytes, stream: str, stamp: int, rig, tele_rows: dict,
+                  from_telemetry: dict) -> tuple[bytes, int]:
+    """(the last 4 KiB of a thermal frame's image rows (to find frozen frames), its telemetry frame
+    counter or -1), after recording the FFC state of its telemetry rows, when it has some, in
+    ``from_telemetry``."""
     from platform_tools.boson.telemetry import TelemetryError, decode_image_data
     try:
         height, width, step, off = image_layout(data)
     except (struct.error, ValueError, IndexError):
-        return bytes(data[-4096:])
+        return bytes(data[-4096:]), -1
     key = (stream, width, height)
     if key not in tele_rows:
         tele_rows[key] = telemetry_rows(rig, width, height)
     rows = tele_rows[key]
     end = off + (height - rows) * step
+    counter = -1
     if rows:
         cam = stream  # thermal_left / thermal_right
         try:
             tel = decode_image_data(memoryview(data)[off:off + height * step], height, step, rows)
             from_telemetry[cam].append((stamp, int(tel.ffc_status)))
+            counter = tel.frame_counter
         except TelemetryError:
             pass
-    return bytes(data[max(off, end - 4096):end])
+    return bytes(data[max(off, end - 4096):end]), counter

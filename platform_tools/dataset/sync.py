@@ -24,8 +24,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import logging
+
 from .recording import CAMERAS, Recording, RecordingError
-from . import trigger as trig
+from . import counters, trigger as trig
+
+log = logging.getLogger(__name__)
 
 NS = 1_000_000_000
 PAIRS = (("thermal_left", "thermal_right"), ("zed_left", "thermal_left"), ("zed_left", "thermal_right"))
@@ -117,6 +121,9 @@ def ffc_periods(rec: Recording, camera: str, period_ns: float) -> list[dict]:
     frozen frames."""
     status = rec.status.get(camera) or []
     source = (getattr(rec, "status_source", None) or {}).get(camera) or "status"
+    lag = (getattr(rec, "status_lag_frames", None) or {}).get(camera, 0)
+    if lag:
+        source += f" (moved {lag:+d} trigger{'s' if abs(lag) > 1 else ''} onto the FFC freeze)"
     out = []
     if status:
         start = None
@@ -223,18 +230,72 @@ def analyse(rec: Recording, rig, limits: Limits) -> dict:
                        "limit": limits.max_drift_ppm, "unit": "ppm",
                        "ok": abs(p["drift_ppm"]) - 3 * p["drift_stderr_ppm"] <= limits.max_drift_ppm})
     try:
-        trig_rep, trig_err = trigger_report(triggers(rec, rig)), None
+        assignment = triggers(rec, rig)
+        trig_rep, trig_err = trigger_report(assignment), None
     except RecordingError as exc:
-        trig_rep, trig_err = None, str(exc)
+        assignment, trig_rep, trig_err = None, None, str(exc)
     checks.append({"check": "trigger of every thermal frame", "value": trig_err or "established",
                    "limit": "unambiguous", "unit": "", "ok": trig_err is None})
+    by_trigger = {}
+    if assignment is not None:
+        # jitter and drift of frames of the same trigger, each stream's clock steps taken out (per segment)
+        frames = {"zed_left": (rec.streams["zed_left"].stamp_ns, assignment.reference)} | {
+            c: (rec.streams[c].stamp_ns, assignment.cameras[c]) for c in ("thermal_left", "thermal_right")}
+        by_trigger = {f"{a}-{b}": trigger_pair_report(*frames[a], *frames[b]) for a, b in PAIRS}
+        checks = [c for c in checks if not any(c["check"].startswith(name + " ") for name in by_trigger)]
+        for name, p in by_trigger.items():
+            checks.append({"check": f"{name} jitter p99", "value": round(p["jitter_p99_ms"], 3),
+                           "limit": limits.max_pair_jitter_p99_ms, "unit": "ms",
+                           "ok": p["jitter_p99_ms"] <= limits.max_pair_jitter_p99_ms})
+            checks.append({"check": f"{name} drift", "value": round(p["drift_ppm"], 2),
+                           "limit": limits.max_drift_ppm, "unit": "ppm",
+                           "ok": abs(p["drift_ppm"]) - 3 * p["drift_stderr_ppm"] <= limits.max_drift_ppm})
     report = {"triggers": trig_rep, "recording": str(rec.path), "files": [str(f) for f in rec.files], "recovered": rec.recovered,
               "nominal_rate_hz": rate, "clock_steps": steps, "streams": streams, "ffc": ffc, "pairs": pairs,
+              "pairs_by_trigger": by_trigger,
               "limits": limits.__dict__, "checks": checks,
               "verdict": "pass" if all(c["ok"] for c in checks) else "fail"}
     report["_series"] = series   # for the plots; removed before printing
     report["_times"] = times
     return report
+
+
+def _segment_ids(n: int, ct: "trig.CameraTriggers", reference: bool) -> np.ndarray:
+    """Per frame, which clock segment it is in (cut at every step of its stream)."""
+    ids = np.zeros(n, np.int64)
+    cuts = [s.index for s in ct.steps] if reference else [g.first for g in ct.segments[1:]]
+    for c in sorted(cuts):
+        ids[c:] += 1
+    return ids
+
+
+def trigger_pair_report(ta: np.ndarray, ca: "trig.CameraTriggers", tb: np.ndarray,
+                        cb: "trig.CameraTriggers") -> dict:
+    """Frames of two streams exposed by the same trigger: how their stamp difference varies (jitter p99 about
+    the fit) and drifts (ppm, pooled within the segments between clock steps of either stream, so a step is
+    never read as drift), with the drift's standard error."""
+    ia = {int(k): i for i, k in enumerate(ca.trigger) if k >= 0}
+    both = [(ia[int(k)], j) for j, k in enumerate(cb.trigger) if k >= 0 and int(k) in ia]
+    if len(both) < 3:
+        return {"pairs": len(both), "jitter_p99_ms": float("inf"), "drift_ppm": 0.0, "drift_stderr_ppm": float("inf")}
+    i, j = np.array(both).T
+    r = (tb[j].astype(np.int64) - ta[i].astype(np.int64)).astype(float) / 1e6        # ms
+    x = (ta[i] - ta[i].min()).astype(float) / NS                                        # s
+    group = _segment_ids(len(ta), ca, ca.camera == "zed_left")[i] * 1000 + \
+        _segment_ids(len(tb), cb, cb.camera == "zed_left")[j]
+    dx, dr = x.copy(), r.copy()
+    for g in np.unique(group):
+        m = group == g
+        dx[m] -= dx[m].mean()
+        dr[m] -= dr[m].mean()
+    sxx = float(np.sum(dx ** 2))
+    slope = float(np.sum(dx * dr) / sxx) if sxx > 0 else 0.0                            # ms per s
+    res = dr - slope * dx
+    dof = max(len(r) - 1 - len(np.unique(group)), 1)
+    se = float(np.sqrt(np.sum(res ** 2) / dof / max(sxx, 1e-12)))
+    return {"pairs": len(r), "segments": int(len(np.unique(group))),
+            "jitter_p99_ms": float(np.percentile(np.abs(res), 99)),
+            "drift_ppm": slope * 1000.0, "drift_stderr_ppm": se * 1000.0}
 
 
 def offsets_ns(rec: Recording, rig) -> dict[str, float]:
@@ -262,6 +323,11 @@ def triggers(rec: Recording, rig) -> "trig.Assignment":
         st = rec.streams[cam]
         w = windows.get(cam)
         counter = getattr(st, "counter", None)
+        why = counters.implausible(st.stamp_ns, counter, period) if counter is not None else None
+        if why:
+            out.ignored_counters[cam] = f"{st.topic}: the telemetry frame counter is not used: {why}"
+            log.warning("%s: %s", rec.path, out.ignored_counters[cam])
+            counter = None
         try:
             out.cameras[cam] = trig.assign(zl.stamp_ns, st.stamp_ns, period, camera=cam, ref=ref,
                                            window_ms=(w.min.value, w.max.value) if w else None,
@@ -274,12 +340,16 @@ def triggers(rec: Recording, rig) -> "trig.Assignment":
 def trigger_report(a: "trig.Assignment") -> dict:
     """Per camera: offset after the ZED (per segment), its uncertainty, how it was established, steps."""
     def steps(ct):
-        return [{"at_ns": s.at_ns, "step_ms": s.step_ns / 1e6, "exact": s.exact} for s in ct.steps]
+        return [{"at_ns": s.at_ns, "step_ms": s.step_ns / 1e6, "exact": s.exact, "sized_by": s.sized_by}
+                for s in ct.steps]
     out = {"zed_left": {"clock_steps": steps(a.reference)}}
     for cam, ct in a.cameras.items():
         out[cam] = {"segments": [{"frames": [g.first, g.last], "offset_ms": g.offset_ns / 1e6,
                                   "uncertainty_ms": g.uncertainty_ns / 1e6, "established_by": g.established_by,
                                   "candidates_ms": g.candidates_ms} for g in ct.segments],
                     "clock_steps": steps(ct), "unassigned_frames": int((ct.trigger < 0).sum()),
-                    "jitter_ms": ct.jitter_ns / 1e6}
+                    "jitter_ms": ct.jitter_ns / 1e6,
+                    "frame_counter": ({"host_drops": ct.host_drops, "missing_pulses": ct.missing_pulses,
+                                       "repeated_frames": ct.repeated} if ct.counter else
+                                      ({"ignored": a.ignored_counters[cam]} if cam in a.ignored_counters else None))}
     return out

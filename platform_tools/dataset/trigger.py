@@ -8,8 +8,8 @@ every clock step of either stream), from the evidence the recording holds:
 1. **Causality**: a frame is never stamped before its trigger (offset >= -3 sigma of its jitter).
 2. **Trigger gaps**: a trigger pulse that never came is missing from every camera at the same trigger;
    the candidate offset that lines the gaps of both streams up is the right one. With the Boson's
-   telemetry frame counter, a thermal gap whose counter did not skip is a missing pulse (an anchor);
-   one whose counter skipped is a host drop (not an anchor).
+   telemetry frame counter (:mod:`.counters`), a thermal gap whose counter did not skip is a missing
+   pulse (an anchor); one whose counter skipped is a host drop (not an anchor), so fewer gaps decide.
 3. **The rig's stated latency** (``sync.stamp_latency_ms``): a window narrower than a period leaves
    one candidate.
 
@@ -20,16 +20,20 @@ Evidence that disagrees, or none that leaves exactly one candidate, ends in :cla
 intervals, ``max(1, round(interval / period))``) are constant but for jitter; a step is where the
 median of the frames after differs from the median before by more than ``STEP_MIN_NS``. Backward steps
 (either sign, any size) are sized exactly; a forward step is known modulo one period unless the
-segments' alignment, the IMU or the frame counter says how many periods it held.
+segments' alignment, the IMU or the frame counter says how many periods it held. With the frame counter
+a thermal stream's steps are found on the counter's trigger grid, at their full size.
 
 Pure functions over stamp arrays (numpy); no I/O.
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
+
+from . import counters
 
 #: a clock step smaller than this is not told apart from jitter (the issue asks for 5 ms)
 STEP_MIN_NS = 2_500_000
@@ -37,6 +41,12 @@ STEP_MIN_NS = 2_500_000
 STEP_WINDOW = 8
 #: anchors needed without a frame counter to classify the gaps (chance coincidences of host drops)
 MIN_ANCHORS_WITHOUT_COUNTER = 3
+#: anchors needed with the frame counter (every one a pulse the Boson never got; one alone could be a pulse
+#: missed by that Boson only, on a trigger where the ZED happened to drop a frame)
+MIN_ANCHORS_WITH_COUNTER = 2
+#: with the frame counter the gaps decide when every other offset puts at least this many more of the
+#: counter's missing pulses on ZED frames (contradictions) than the best one
+COUNTER_LEAD = 2
 #: a frame this far (or 6 robust sigmas) from its segment's trigger grid is left unassigned
 UNFIT_MIN_NS = 4_000_000
 #: candidate offsets searched, in periods
@@ -56,6 +66,7 @@ class Step:
     at_ns: int                  # its stamp as recorded
     step_ns: int                # size (wrapped to one period when sized by stamps alone, forward)
     exact: bool                 # sized without the modulo-one-period ambiguity
+    sized_by: str = "stamps"    # "stamps", "imu" or "frame counter"
 
 
 @dataclass
@@ -78,6 +89,9 @@ class CameraTriggers:
     jitter_ns: float
     host_drops: int = 0
     anchors: int = 0
+    missing_pulses: int = 0     # pulses the frame counter says never reached the camera
+    repeated: int = 0           # frames whose counter did not advance
+    counter: bool = False       # the frame counter was read
 
 
 @dataclass
@@ -85,6 +99,8 @@ class Assignment:
     period_ns: float
     reference: CameraTriggers   # the ZED left
     cameras: dict[str, CameraTriggers] = field(default_factory=dict)
+    #: camera -> why its telemetry frame counter was not used (one line), when it was not
+    ignored_counters: dict[str, str] = field(default_factory=dict)
 
 
 # ----------------------------------------------------------------------------- one stream
@@ -151,6 +167,7 @@ def reference(t: np.ndarray, period_ns: float, imu: np.ndarray | None = None) ->
                 if abs(size) >= STEP_MIN_NS and abs(((size - st.step_ns) / period_ns) - round((size - st.step_ns) / period_ns)) < 0.1:
                     st.step_ns, st.exact = int(round(st.step_ns + round((size - st.step_ns) / period_ns)
                                                       * period_ns)), True
+                    st.sized_by = "imu"
                     # the triggers that passed over the step, now that its size is known
                     d = int(t[st.index]) - int(t[st.index - 1])
                     k[st.index:] += max(1, round((d - st.step_ns) / period_ns)) - (k[st.index] - k[st.index - 1])
@@ -190,8 +207,8 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
     ref = ref or reference(tz, period_ns)
     kz = ref.trigger
     zgrid = _grid(tz, kz, ref.steps)
-    ks = local_indices(ts, period_ns)
-    own = find_steps(ts, ks, period_ns)
+    own = counter_steps(ts, counter, period_ns) if counter is not None else \
+        find_steps(ts, local_indices(ts, period_ns), period_ns)
     # cut where either stream's clock stepped: the camera's own steps, and the ZED's (mapped to this
     # stream: the same event when this stream stepped there too, else where its stamps pass the ZED's
     # last stamp before the step, both still on the clock before it)
@@ -202,7 +219,8 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
         same = [o.index for o in own if abs(int(ts[o.index - 1]) - pre) < 3 * period_ns]
         i = same[0] if same else int(np.searchsorted(running, pre + period_ns / 2))
         cuts.setdefault(i, {"own": None, "zed": None})["zed"] = z
-    host_drop, anchor_gap = _classify_gaps(ts, counter, period_ns)
+    gaps_by_counter = counters.classify(ts, counter, period_ns, {o.index for o in own}) \
+        if counter is not None else None
     zmissing = set(np.setdiff1d(np.arange(kz[0], kz[-1] + 1), kz).tolist())
     trig = np.zeros(len(ts), np.int64)
     resid = np.zeros(len(ts))
@@ -246,6 +264,9 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
                     trig[a:b + 1] = np.where(_unfit(dev), -1, base - n)
                     resid[a:b + 1] = dev
                     what = "both clocks" if both else ("this clock" if o else "the ZED clock")
+                    by = sorted({st.sized_by for st in (o, z) if st is not None and st.exact})
+                    if by and not both:
+                        what += ", sized by the " + " and the ".join(by)
                     segs.append(Segment(a, b, (phase + n) * P, unc,
                                         f"continuity across a step of {d / 1e6 if not both else o.step_ns / 1e6:+.1f}"
                                         f" ms ({what})", [round((phase + n) * P / 1e6, 3)]))
@@ -253,13 +274,29 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
         margin = max(1e6, 3 * sigma)
         cands = [n for n in range(-1, MAX_PERIODS + 1) if (phase + n) * P >= -margin]
         evidence = []
-        # trigger gaps: base indices missing in this segment that are anchors
-        gaps = _base_gaps(base, anchor_gap[a:b + 1] if anchor_gap is not None else None)
-        scores = {n: len([g for g in gaps if (g - n) in zmissing]) for n in cands}
-        need = 1 if counter is not None else MIN_ANCHORS_WITHOUT_COUNTER
+        # trigger gaps: base indices missing in this segment
+        if gaps_by_counter is not None:
+            # each gap holds q pulses the Boson never got, somewhere among its triggers: at the right offset q
+            # of them are holes of the ZED grid (matches); each one short is a contradiction
+            held = _gap_triggers(base, gaps_by_counter.missing[a:b + 1])
+            gaps = [t for pos, _ in held for t in pos]
+            holes = {n: [sum((t - n) in zmissing for t in pos) for pos, _ in held] for n in cands}
+            scores = {n: sum(min(q, h) for (_, q), h in zip(held, holes[n])) for n in cands}
+            against = {n: sum(max(q - h, 0) for (_, q), h in zip(held, holes[n])) for n in cands}
+        else:
+            gaps = _base_gaps(base)
+            scores = {n: len([g for g in gaps if (g - n) in zmissing]) for n in cands}
+        need = MIN_ANCHORS_WITH_COUNTER if counter is not None else MIN_ANCHORS_WITHOUT_COUNTER
         ranked = sorted(scores.items(), key=lambda kv: -kv[1])
         by_gaps = None
-        if ranked and ranked[0][1] >= need and (len(ranked) == 1 or ranked[0][1] > GAP_DOMINANCE * ranked[1][1]):
+        if counter is not None:
+            # every counter gap is a pulse the Boson never got: at a wrong offset it lands on a ZED frame
+            # (a contradiction), at the right one on a ZED hole unless the Boson alone missed it
+            decisive = bool(ranked) and all(against[n] - against[ranked[0][0]] >= COUNTER_LEAD
+                                            for n in cands if n != ranked[0][0])
+        else:
+            decisive = bool(ranked) and (len(ranked) == 1 or ranked[0][1] > GAP_DOMINANCE * ranked[1][1])
+        if ranked and ranked[0][1] >= need and decisive:
             by_gaps = ranked[0][0]
             n_anchor_total += ranked[0][1]
         in_window = cands
@@ -273,6 +310,9 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
             n = by_gaps
             evidence.append(f"trigger gaps ({scores[n]} common with the ZED"
                             + (", classified by the frame counter" if counter is not None else "") + ")")
+            if counter is not None and against[n]:
+                evidence.append(f"{against[n]} pulse(s) the counter says this Boson missed "
+                                f"were seen by the ZED (missed by this Boson alone)")
             if window_ms is not None and n not in in_window:
                 evidence.append(f"outside the rig's stated latency {window_ms[0]:g}..{window_ms[1]:g} ms: "
                                 f"measure it and correct sync.stamp_latency_ms.{camera}")
@@ -284,8 +324,10 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
                 f"{where}{camera}: which trigger exposed frames {a}..{b} is ambiguous: the rig's stated latency "
                 f"(sync.stamp_latency_ms.{camera}: {window_ms[0]:g}..{window_ms[1]:g} ms) gives "
                 f"{(phase + w) * P / 1e6:.1f} ms, the trigger gaps common with the ZED favour {(phase + g) * P / 1e6:.1f} "
-                f"ms ({scores[g]} against {scores[w]}, not decisive); missing evidence: a measured latency or the "
-                f"Boson frame counter (telemetry rows)")
+                f"ms ({scores[g]} against {scores[w]}, not decisive); missing evidence: a measured latency"
+                + (f" (the frame counter's missing pulses fall on {against[w]} ZED frame(s) at the first, "
+                   f"{against[g]} at the second: fewer than {COUNTER_LEAD} apart)" if counter is not None
+                   else " or the Boson frame counter (telemetry rows)"))
         elif len(in_window) == 1:
             n = in_window[0]
             evidence.append("causality + the rig's stated latency "
@@ -313,9 +355,26 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
         trig[a:b + 1] = np.where(_unfit(dev), -1, base - n)
         resid[a:b + 1] = dev
         segs.append(Segment(a, b, (phase + n) * P, unc, "; ".join(evidence), cand_ms))
+    _refine_counter_steps(own, cuts, segs)
     jit = float(np.std(resid)) if len(resid) > 2 else 0.0
-    return CameraTriggers(camera, trig, resid, segs, own, jit,
-                          host_drops=int(host_drop) if host_drop is not None else 0, anchors=n_anchor_total)
+    g = gaps_by_counter
+    return CameraTriggers(camera, trig, resid, segs, own, jit, host_drops=g.host_drops if g else 0,
+                          anchors=n_anchor_total, missing_pulses=g.missing_pulses if g else 0,
+                          repeated=g.repeated if g else 0, counter=g is not None)
+
+
+def _refine_counter_steps(own: list[Step], cuts: dict, segs: list[Segment]) -> None:
+    """A step the frame counter sized is also the change of offset between the segments around it (every
+    frame of both, rather than the medians of a few): take that, the ZED's own step added back."""
+    for k in range(1, len(segs)):
+        cut = cuts.get(segs[k].first)
+        o = cut["own"] if cut else None
+        if o is None or o.sized_by != "frame counter" or (cut["zed"] is not None and not cut["zed"].exact):
+            continue
+        o.step_ns = int(round(segs[k].offset_ns - segs[k - 1].offset_ns + (cut["zed"].step_ns if cut["zed"] else 0)))
+        if cut["zed"] is None:      # the text names the step's size: the refined one
+            segs[k].established_by = re.sub(r"a step of [+-][\d.]+ ms", f"a step of {o.step_ns / 1e6:+.1f} ms",
+                                            segs[k].established_by)
 
 
 def _unfit(dev: np.ndarray) -> np.ndarray:
@@ -328,23 +387,24 @@ def _wrap(x: float, period: float) -> float:
     return (x + period / 2) % period - period / 2
 
 
-def _classify_gaps(ts: np.ndarray, counter: np.ndarray | None, period_ns: float):
-    """(host drops counted, per frame: True when the gap before it is a missing trigger pulse).
-
-    Without a counter every gap may be either: (None, None)."""
-    if counter is None:
-        return None, None
-    c = counter.astype(np.int64)
-    dc = np.mod(np.diff(c), 1 << 32)
-    m = np.maximum(1, np.round(np.diff(ts.astype(np.int64)) / period_ns).astype(np.int64))
-    anchor = np.concatenate([[False], (m > 1) & (dc < m)])     # fewer pulses counted than periods passed
-    return int(np.sum(np.maximum(dc - 1, 0))), anchor
+def counter_steps(ts: np.ndarray, counter: np.ndarray, period_ns: float) -> list[Step]:
+    """Clock steps of a thermal stream found on the frame counter's trigger grid: exact, either sign, any size
+    (a level change of a whole number of periods is pulses that never came, :mod:`.counters`)."""
+    k = counters.pulse_grid_index(ts, counter, period_ns)
+    return [Step(st.index, st.at_ns, st.step_ns, exact=True, sized_by="frame counter")
+            for st in find_steps(ts, k, period_ns) if not counters.is_missing_pulses(st.step_ns, period_ns)]
 
 
-def _base_gaps(base: np.ndarray, anchor: np.ndarray | None) -> list[int]:
-    """Base indices missing between consecutive frames (only the anchors', when they are known)."""
+def _gap_triggers(base: np.ndarray, missing: np.ndarray) -> list[tuple[list[int], int]]:
+    """Per gap that holds pulses the counter says never came: (its base indices, how many of them)."""
+    return [(list(range(int(base[i - 1]) + 1, int(base[i]))), int(missing[i]))
+            for i in range(1, len(base)) if missing[i] > 0 and base[i] - base[i - 1] > 1]
+
+
+def _base_gaps(base: np.ndarray) -> list[int]:
+    """Base indices missing between consecutive frames (host drops and missing pulses alike)."""
     out = []
     for i in range(1, len(base)):
-        if base[i] - base[i - 1] > 1 and (anchor is None or anchor[i]):
+        if base[i] - base[i - 1] > 1:
             out += list(range(int(base[i - 1]) + 1, int(base[i])))
     return out
