@@ -7,6 +7,11 @@ every 1/30 s; pulses missing from every camera; per camera host drops; each Boso
 triggers; host clock steps on the ZED clock (ZED images and IMU), on the thermal clock, or on both.
 Images are tiny (ZED 32x20, Boson 40x32: the calibrated aspect ratios) so the tests stay fast.
 
+With ``telemetry`` on, every Boson frame carries two telemetry rows below its image, written here from the
+documented format (``../shared/reference/boson-protocol.md``: status word at byte 76, frame counter at byte 84,
+frame count at the last FFC at byte 88, big-endian) with ``struct``, not with the project's encoder. The
+counter counts the pulses the camera received: host drops advance it, pulses that never came do not.
+
 Topic names come from a layout (the project's: the rig's ``on_device.topics``; the released stack's:
 ``UPSTREAM`` below, as its topic_list.yaml spells them).
 """
@@ -14,6 +19,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+
+import struct
 
 import cv2
 import numpy as np
@@ -26,6 +33,12 @@ IMU_PERIOD_NS = 5_000_000
 ZED_SIZE = (32, 20)        # W, H: 1920x1200 / 60
 THERMAL_SIZE = (40, 32)    # 640x512 / 16
 TRANSPORT_NS = 6_000_000   # log time after the stamp
+TELEMETRY_ROWS = 2         # rig.yaml on_device.thermal_telemetry_rows
+#: the frame counters when the recording starts (a Boson counts from its boot)
+COUNTER_BASE = {"thermal_left": 4_294_967_200, "thermal_right": 812_345}   # the left one wraps (u32)
+#: the FFC state's place in the status word: bits 4-5 (the project's assumption, platform_tools/boson/telemetry.py;
+#: no public source gives it), values of bosonGetFfcStatus (2: in progress)
+FFC_STATE_SHIFT = 4
 
 #: the released TartanRGBT stack's topics (upstream-tartanrgbt.md): the ones a reader needs, and the
 #: extra ones its bags also carry
@@ -60,6 +73,17 @@ class Spec:
     zed_compressed: bool = True            # the project's ZED topics are JPEG; upstream's raw bgra8
     depth: bool = True
     camera_info: bool = False
+    #: Boson telemetry rows (frame counter, FFC state) below each thermal image
+    telemetry: bool = False
+    #: camera -> trigger pulses that one Boson alone never received (the ZED has those frames)
+    boson_missed: dict = field(default_factory=dict)
+    imu: bool = True
+    #: the status message's log time after its image's (negative: logged before the image reached the recorder)
+    status_log_after_ns: int = 1_000_000
+    #: frames by which the telemetry's FFC state leads the frozen image (a camera flagging the FFC early)
+    telemetry_ffc_lead: int = 0
+    #: the telemetry line delivered with the bytes of every 16-bit word swapped (a layout this reader assumes wrongly)
+    telemetry_word_swapped: bool = False
     seed: int = 0
 
 
@@ -80,11 +104,33 @@ def timeline(spec: Spec) -> dict:
     tz = T0_NS + kz * PERIOD_NS + rng.normal(0, 0.2e6, len(kz))
     out["zed_left"] = (kz, tz, _stepped(tz, spec.steps, "zed"))
     for cam in ("thermal_left", "thermal_right"):
-        k = k_all[rng.random(len(k_all)) > spec.drop]
+        k_cam = np.array([k for k in k_all if k not in spec.boson_missed.get(cam, ())]) \
+            if spec.boson_missed.get(cam) else k_all
+        k = k_cam[rng.random(len(k_cam)) > spec.drop]
         t = T0_NS + k * PERIOD_NS + spec.latency_ms[cam] * 1e6 + rng.normal(0, 0.6e6, len(k))
         out[cam] = (k, t, _stepped(t, spec.steps, "thermal"))
     ti = T0_NS - 1e8 + np.arange(int((spec.triggers * PERIOD_NS + 2e8) / IMU_PERIOD_NS)) * IMU_PERIOD_NS
     out["zed_imu"] = (None, ti, _stepped(ti, spec.steps, "zed"))
+    return out
+
+
+def telemetry_line(counter: int, ffc_state: int, ffc_counter: int, nbytes: int) -> bytes:
+    """A Boson telemetry line as the reference describes it (big-endian fields at bytes 76, 84, 88)."""
+    line = bytearray(nbytes)
+    struct.pack_into(">Q", line, 76, ffc_state << FFC_STATE_SHIFT)
+    struct.pack_into(">I", line, 84, counter % (1 << 32))
+    struct.pack_into(">I", line, 88, ffc_counter % (1 << 32))
+    return bytes(line)
+
+
+def counters(spec: Spec, cam: str) -> dict[int, int]:
+    """Trigger pulse -> the camera's frame counter at it: one count per pulse the camera received."""
+    out, c = {}, COUNTER_BASE[cam]
+    for k in range(spec.triggers):
+        if k in spec.missing or k in spec.boson_missed.get(cam, ()):
+            continue
+        out[k] = c
+        c += 1
     return out
 
 
@@ -146,6 +192,8 @@ def write(path: Path, spec: Spec, topics: dict[str, str], storage: str = "mcap",
         first, last = spec.ffc.get(cam, (-1, -2))
         truth["ffc_triggers"][cam] = [int(k) for k in k_ if first <= k <= last]
         frozen_px = None
+        count = counters(spec, cam)
+        ffc_counter = count.get(first, COUNTER_BASE[cam]) if first >= 0 else COUNTER_BASE[cam] - 900
         for k, t, h in zip(k_, t_, h_):
             in_ffc = first <= k <= last
             if in_ffc and frozen_px is not None:
@@ -154,25 +202,36 @@ def write(path: Path, spec: Spec, topics: dict[str, str], storage: str = "mcap",
                 px = (20000 + rng.normal(0, 300, (THERMAL_SIZE[1], THERMAL_SIZE[0]))).astype(np.uint16)
                 frozen_px = px
             log = int(t) + TRANSPORT_NS
+            if spec.telemetry:     # the rows below the image: the line's bytes as the frame buffer holds them
+                nbytes = TELEMETRY_ROWS * THERMAL_SIZE[0] * 2
+                lead = spec.telemetry_ffc_lead
+                flagged = first - lead <= k <= last - lead
+                line = telemetry_line(count[int(k)], 2 if flagged else (3 if k > last - lead >= 0 else 0),
+                                      ffc_counter if k >= first >= 0 else COUNTER_BASE[cam] - 900, nbytes)
+                if spec.telemetry_word_swapped:
+                    line = bytes(np.frombuffer(line, "<u2").byteswap().tobytes())
+                px = np.vstack([px, np.frombuffer(line, "<u2").reshape(TELEMETRY_ROWS, THERMAL_SIZE[0])])
             msgs.append((log, topics[cam], "sensor_msgs/msg/Image", _image(ts, int(h), f"{cam}_optical", px, "mono16")))
             truth["trigger_of"].setdefault(cam, {})[int(h)] = int(k)
+            if spec.telemetry:
+                truth.setdefault("counter_of", {}).setdefault(cam, {})[int(h)] = count[int(k)]
             if spec.status == "diagnostic":
                 kv = ts.types["diagnostic_msgs/msg/KeyValue"]
                 st = ts.types["diagnostic_msgs/msg/DiagnosticStatus"](
                     level=bytes([1 if in_ffc else 0])[0], name=cam, message="FFC in progress" if in_ffc else "",
                     hardware_id="93588", values=[kv(key="ffc_status", value="2" if in_ffc else "0")])
-                msgs.append((log + 1_000_000, topics[f"{cam}_status"], "diagnostic_msgs/msg/DiagnosticArray",
+                msgs.append((log + spec.status_log_after_ns, topics[f"{cam}_status"], "diagnostic_msgs/msg/DiagnosticArray",
                              ts.types["diagnostic_msgs/msg/DiagnosticArray"](header=_header(ts, int(h), ""),
                                                                              status=[st])))
             elif spec.status == "bool":
-                msgs.append((log + 1_000_000, topics[f"{cam}_status"], "std_msgs/msg/Bool",
+                msgs.append((log + spec.status_log_after_ns, topics[f"{cam}_status"], "std_msgs/msg/Bool",
                              ts.types["std_msgs/msg/Bool"](data=bool(in_ffc))))
             elif spec.status == "uint8":
-                msgs.append((log + 1_000_000, topics[f"{cam}_status"], "std_msgs/msg/UInt8",
+                msgs.append((log + spec.status_log_after_ns, topics[f"{cam}_status"], "std_msgs/msg/UInt8",
                              ts.types["std_msgs/msg/UInt8"](data=2 if in_ffc else 0)))
     _, ti, hi = tl["zed_imu"]
     V3, Q = ts.types["geometry_msgs/msg/Vector3"], ts.types["geometry_msgs/msg/Quaternion"]
-    for t, h in zip(ti, hi):
+    for t, h in zip(ti, hi) if spec.imu else ():
         msgs.append((int(t) + 1_000_000, topics["zed_imu"], "sensor_msgs/msg/Imu", ts.types["sensor_msgs/msg/Imu"](
             header=_header(ts, int(h), "zed_imu_link"), orientation=Q(x=0.0, y=0.0, z=0.0, w=1.0),
             orientation_covariance=np.zeros(9), angular_velocity=V3(x=0.0, y=0.0, z=0.0),

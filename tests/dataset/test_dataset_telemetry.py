@@ -92,3 +92,24 @@ def test_sync_check_command_without_the_status_topic(platform_tools, no_status):
     doc = json.loads(r.stdout)
     assert {p["source"] for c in ("thermal_left", "thermal_right") for p in doc["ffc"][c]} == {"telemetry"}
     assert np.all([len(doc["ffc"][c]) == 1 for c in ("thermal_left", "thermal_right")])
+
+
+@pytest.mark.slow
+def test_the_frame_counter_of_the_telemetry_rows_tells_host_drops_from_missing_pulses(sim, rig):
+    """The simulator's Bosons count every trigger pulse (truth.json: frame_counter_base + pulse number); the frames
+    it dropped on the host show as counter gaps, and no pulse is missing."""
+    path, truth = sim
+    rec = open_recording(path, rig)
+    rep = analyse(rec, rig, Limits.from_rig(rig))
+    for cam in ("thermal_left", "thermal_right"):
+        st = rec.streams[cam]
+        base = truth["telemetry"]["frame_counter_base"][cam]
+        first, last = int(st.counter.min()) - base, int(st.counter.max()) - base
+        dropped = [k for k in truth["dropped"][cam] if first < k < last]
+        assert rep["triggers"][cam]["frame_counter"] == {"host_drops": len(dropped), "missing_pulses": 0,
+                                                         "repeated_frames": 0}
+        assert len(dropped) > 0
+        # the clock step of every stream is sized by the counter on the thermal clock
+        (step,) = rep["triggers"][cam]["clock_steps"]
+        assert step["sized_by"] == "frame counter"
+        assert step["step_ms"] == pytest.approx(truth["clock_step"]["step_ns"] / 1e6, abs=1.0)
