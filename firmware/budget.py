@@ -12,7 +12,7 @@ from pathlib import Path
 
 from platform_tools.rig.checks import FAILED, OK, Check
 from platform_tools.rig import Rig
-from firmware.device.topics import CRC_OFF_PRESETS, camera_info_topic, recorded_topics, records_depth
+from firmware.device.topics import CRC_OFF_PRESETS, camera_info_topic, health_topics, recorded_topics, records_depth
 
 MB = 1e6
 #: bytes per pixel of a ZED JPEG (image_transport's compressed, quality 95 by default): an estimate for
@@ -24,6 +24,8 @@ IMU_MSG_BYTES = 330
 #: small messages: a sensor_msgs/CameraInfo (plumb_bob), one DiagnosticArray (the FFC status, the
 #: wrapper's diagnostics at 1 Hz), the static transforms once
 CAMERA_INFO_BYTES = 400
+#: a health message (std_msgs Float64 or String) in CDR with its MCAP record, once per second
+HEALTH_MSG_BYTES_PER_S = 64.0
 STATUS_MSG_BYTES = 400
 DIAGNOSTICS_BYTES_PER_S = 4000.0
 #: MCAP message records, chunk and index overhead on top of the payload
@@ -64,6 +66,8 @@ def topic_rates(rig: Rig) -> list[TopicRate]:
     if records_depth(rig):
         bpp = 2 if od.zed_depth_openni else 4
         rates[t.zed_depth] = (zed_px * bpp * rate, f"{zed_px:.0f} px {'16UC1 mm' if bpp == 2 else '32FC1 m'}")
+    for topic in health_topics(rig):
+        rates[topic] = (HEALTH_MSG_BYTES_PER_S, "one health message per second")
     for image in (t.zed_left, t.zed_right, t.thermal_left, t.thermal_right):
         rates[camera_info_topic(image)] = (CAMERA_INFO_BYTES * rate, "one CameraInfo per frame")
     return [TopicRate(topic, rates[topic][0] * MCAP_OVERHEAD, rates[topic][1]) for topic in recorded_topics(rig)]

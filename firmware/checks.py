@@ -15,7 +15,7 @@ import yaml
 
 from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
 from platform_tools.rig import Rig
-from firmware import budget, privilege, v4l2
+from firmware import budget, health_topics, privilege, v4l2
 from firmware.context import L4T_RELEASES, build_context
 from firmware.launch_stub import ExecuteProcess, Node, load_launch_file
 
@@ -346,10 +346,34 @@ def check_dockerfiles(folder: Path, rig: Rig) -> Check:
                                     f"contexts; every compose image built")
 
 
+def check_device_install(folder: Path, rig: Rig) -> Check:
+    """The pyproject.toml the images install declares only console scripts whose module is in the source
+    they install: a `platform_tools` or `calibrate` script there would be installed and fail on import."""
+    import tomllib
+    images = build_context(rig)["images"]
+    src = folder / images["dir"] / images["source_dir"]
+    try:
+        project = tomllib.loads((src / "pyproject.toml").read_text())
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        return Check("device install", FAILED, f"{src.relative_to(folder)}/pyproject.toml: {exc}")
+    scripts = project.get("project", {}).get("scripts", {})
+    bad = []
+    for name, entry in scripts.items():
+        module = entry.split(":", 1)[0].split(".")
+        if not ((src.joinpath(*module).with_suffix(".py")).is_file() or (src.joinpath(*module, "__init__.py")).is_file()):
+            bad.append(f"console script {name} = {entry}: {'.'.join(module)} is not in the images' source")
+    if project.get("project", {}).get("dependencies"):
+        bad.append("dependencies are declared: the images install with --no-deps from Ubuntu and pip (Dockerfiles)")
+    if bad:
+        return Check("device install", FAILED, "; ".join(bad))
+    return Check("device install", OK, f"console scripts {', '.join(scripts) or 'none'}, each in the images' source")
+
+
 def run_checks(folder: Path, rig: Rig) -> list[Check]:
     folder = Path(folder).resolve()   # validators run inside the folder: no relative path may leak in
     return [check_compose_valid(folder), check_compose_matches_rig(folder, rig), check_shellcheck(folder),
             check_params(folder), check_launch(folder, rig), check_unit(folder, rig), check_udev(folder, rig),
-            check_dockerfiles(folder, rig), *privilege.run(folder, rig), budget.check_budget(folder, rig),
+            check_dockerfiles(folder, rig), check_device_install(folder, rig), *privilege.run(folder, rig),
+            budget.check_budget(folder, rig), health_topics.check_health_topics(folder, rig),
             budget.check_chunk_crcs(rig),
             v4l2.check_controls(folder, rig, [t["name"] for t in build_context(rig)["thermal"]])]

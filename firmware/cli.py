@@ -5,17 +5,18 @@ platform_tools.boson): the images install nothing else. On a workstation the sam
 
     rig-device record-service [--rig FILE] ...   the record button and the recorder
     rig-device doctor [--rig FILE] [--json] ...  the pre-flight checks
+    rig-device sros2-keys [--out DIR]            the SROS2 keystore of the rig's enclaves
 """
 from __future__ import annotations
 
 import argparse
 from typing import Sequence
 
-from firmware.commands import doctor, record_service
+from firmware.commands import doctor, record_service, sros2_keys
 from platform_tools.rig.conventions import dispatch, tool_parser
 
 #: subcommand modules, in the order --help lists them
-COMMANDS = [record_service, doctor]
+COMMANDS = [record_service, doctor, sros2_keys]
 
 
 def build_parser() -> argparse.ArgumentParser:

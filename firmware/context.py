@@ -12,6 +12,8 @@ from dataclasses import dataclass, fields
 from platform_tools.boson.discovery import USB_PID, USB_VID
 from platform_tools.rig import Rig
 from firmware import camerainfo, v4l2
+from firmware.device import health
+from firmware.device.topics import health_cameras
 
 #: frames the ZED wrapper does not publish: the thermal cameras, posed from the ZED X centre
 THERMAL_FRAMES = ("thermal_left", "thermal_left_optical", "thermal_right", "thermal_right_optical")
@@ -36,6 +38,8 @@ ROS_FOR_UBUNTU = {"jammy": ("humble", "iron"), "noble": ("jazzy",)}
 #: pairing known to work on this rig. The wrapper tag for SDK 5.0 is an assumption (doctor --bring-up).
 ZED_SDK = "5.0"
 ZED_ROS2_WRAPPER_REF = "humble-v5.0.0"
+#: the ZED SDK installer for an SDK major.minor and an L4T major.minor (what zed_sdk_sha256 pins)
+ZED_SDK_URL = "https://download.stereolabs.com/zedsdk/{sdk}/l4t{l4t}/jetsons"
 #: the ROS 2 apt key (its fingerprint, not its file, is verified: on_device.downloads)
 ROS_APT_KEY_URL = "https://raw.githubusercontent.com/ros/rosdistro/master/ros.key"
 #: environment variable that limits DDS discovery to the host, per ROS distribution (humble has only
@@ -47,9 +51,15 @@ DISCOVERY_ENV = {
     "jazzy": {"localhost": {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"},
               "subnet": {"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}},
 }
-#: where SROS2 keys live on the host (bin/sros2-keys.sh writes them) and inside the containers
+#: where SROS2 keys live on the host (`rig-device sros2-keys` writes them) and inside the containers
 KEYSTORE_DIR = "keystore"
 KEYSTORE_MOUNT = "/keystore"
+#: the SROS2 enclave names are /<ENCLAVE_ROOT>/<compose service>
+ENCLAVE_ROOT = "rgbt"
+#: the compose service publishing /health/<camera>/frequency and /status (firmware.device.health_node)
+HEALTH_SERVICE = "health_topics"
+#: how often it publishes
+HEALTH_PERIOD_S = 1.0
 #: where the rendered folder keeps what the image builds need (compose.yaml's build contexts)
 DOCKER_DIR = "docker"
 #: this repository's installable source inside that folder (the thermal and tools images install it)
@@ -163,6 +173,7 @@ def images_context(rig: Rig) -> dict:
             # the official ROS image (multi-arch: arm64) on the Ubuntu of this L4T, for the images without CUDA
             "ros_base": f"ros:{od.ros_distro}-ros-base-{l4t['ubuntu']}",
             "zed_sdk": ZED_SDK, "zed_wrapper_ref": ZED_ROS2_WRAPPER_REF,
+            "zed_sdk_url": ZED_SDK_URL.format(sdk=ZED_SDK, l4t=l4t["l4t"]),
             "dir": DOCKER_DIR, "source_dir": SOURCE_DIR,
             "dockerfiles": {name: f"{DOCKER_DIR}/{name}/Dockerfile" for name in tags}}
 
@@ -184,6 +195,20 @@ def service_devices(rig: Rig) -> dict[str, list[str]]:
     out["recorder"] = [f"{d}:{d}" for d in (*od.gpio_chips, *serial)]
     out["health"] = [f"{v}:{v}:r" for v in video.values()]
     return out
+
+
+def enclaves(rig: Rig) -> dict[str, str]:
+    """The SROS2 enclave of each compose service that runs ROS 2 nodes (ROS_SECURITY_ENCLAVE_OVERRIDE:
+    every node of the container in it), as compose.yaml spells it and `rig-device sros2-keys` creates it."""
+    services = ["zed", *(f"thermal_{side}" for side in ("left", "right")), "recorder", HEALTH_SERVICE]
+    return {s: f"/{ENCLAVE_ROOT}/{s}" for s in services}
+
+
+def health_context(rig: Rig) -> dict:
+    """What the health publisher watches and where it publishes (config/health.yaml)."""
+    return {"service": HEALTH_SERVICE, "expected_hz": float(rig.desc.sync.rate_hz), "period_s": HEALTH_PERIOD_S,
+            "cameras": [{"name": cam, "camera_info_topic": info, **{f"{k}_topic": v for k, v in health.topics(cam).items()}}
+                        for cam, info in health_cameras(rig).items()]}
 
 
 def ros_env(rig: Rig) -> dict[str, str]:
@@ -233,7 +258,8 @@ def build_context(rig: Rig) -> dict:
         "images": images_context(rig),
         "devices": service_devices(rig),
         "ros_env": ros_env(rig),
+        "health": health_context(rig),
         "uid": od.container_uid,
         "keystore": {"dir": KEYSTORE_DIR, "mount": KEYSTORE_MOUNT, "enabled": od.sros2_enclaves,
-                     "enclaves": ["/rgbt/zed", "/rgbt/thermal_left", "/rgbt/thermal_right", "/rgbt/recorder"]},
+                     "enclaves": enclaves(rig)},
     }

@@ -24,14 +24,18 @@ def add_preflight_options(p: argparse.ArgumentParser) -> None:
                    help="skip the checks that talk to the Bosons (reported as skipped)")
     g.add_argument("--dev-dir", metavar="DIR", type=Path, default=Path("/dev"),
                    help="where the udev names of the cameras are (default /dev)")
+    g.add_argument("--root", metavar="DIR", type=Path, default=Path("/"),
+                   help="where /etc and /sys (the pinmux table, the L4T release) are read from (default /)")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("doctor", help="pre-flight checks: data drive, free space, cameras, trigger, sync mode",
+    p = sub.add_parser("doctor", help="pre-flight checks: data drive, free space, cameras, trigger, sync mode, "
+                                      "GPIO pinmux, host clock",
                        description="Run the checks the recorder runs before every recording: the output folder "
                                    "is on the data drive (not the eMMC), enough free space, both Bosons present "
                                    "and answering with the expected serial numbers, their frame counters "
-                                   "advancing at the trigger rate, their sync mode as configured.",
+                                   "advancing at the trigger rate, their sync mode as configured, the button and "
+                                   "LED pins muxed as GPIOs, the host clock synchronised (chrony).",
                        epilog="Exit 0 when every check passes (or is skipped), 1 when one fails, 2 on bad input.")
     add_rig_options(p)
     add_output_options(p)
@@ -40,8 +44,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--bring-up", action="store_true",
                    help="also check what this project could only assume (USB serials, telemetry layout, trigger, "
                         "ZED SDK / L4T, GPIO pinmux, recorded rate, host clock) and write a report")
-    g.add_argument("--root", metavar="DIR", type=Path, default=Path("/"),
-                   help="where /etc and /sys are read from (default /)")
     g.add_argument("--frames", metavar="DIR", type=Path,
                    help="folder with left.raw / right.raw: one Y16 frame of each Boson, telemetry rows included")
     g.add_argument("--report-dir", metavar="DIR", type=Path, default=Path("."),
@@ -57,7 +59,7 @@ def _table(report: Report) -> str:
 
 
 def _once(args, rig) -> Report:
-    report = run_preflight(rig, args.output_dir, boson=not args.no_boson, dev_dir=args.dev_dir)
+    report = run_preflight(rig, args.output_dir, boson=not args.no_boson, dev_dir=args.dev_dir, root=args.root)
     if getattr(args, "bring_up", False):
         out = Path(args.output_dir or rig.desc.recording.output_dir)
         report.checks += bringup.run(rig, report.cameras, root=args.root, output_dir=out, frames_dir=args.frames,

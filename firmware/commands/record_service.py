@@ -28,7 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "or else runs the pre-flight and shows the result on the LED. SIGTERM stops "
                                    "a running recording cleanly, then exits. Faults are logged and written to "
                                    "events.jsonl in the output folder.",
-                       epilog="LED: idle short blink every 2 s; recording on; stopping fast blink; error N blinks "
+                       epilog="LED: idle short blink every 2 s (power may be cut); recording on; stopping fast blink "
+                              "(finishing: do not cut the power); error N blinks "
                               "(1 pre-flight, 2 recorder crashed, 3 disk full, 4 recorder did not start, "
                               "5 file damaged, 6 recorder hung).")
     add_rig_options(p)
@@ -58,7 +59,7 @@ def cmd_record_service(args: argparse.Namespace) -> int:
         log.warning("--no-boson: recordings start without checking the cameras, trigger and sync mode")
     recorder = Recorder(rig, backend, output_dir=args.output_dir,
                         preflight=lambda: run_preflight(rig, args.output_dir, boson=not args.no_boson,
-                                                        dev_dir=args.dev_dir),
+                                                        dev_dir=args.dev_dir, root=args.root),
                         calibration=args.calibration)
     stop = threading.Event()
     received: list[str] = []
@@ -69,10 +70,11 @@ def cmd_record_service(args: argparse.Namespace) -> int:
 
     signal.signal(signal.SIGTERM, on_signal)
     signal.signal(signal.SIGINT, on_signal)
-    recovered = recorder.recover_interrupted()
     loop = ButtonLoop(recorder, gpio, Button(button_cfg.bounce_ms / 1000.0, button_cfg.long_press_s, active_low),
                       button_cfg.gpio_pin, button_cfg.led_pin)
-    recorder.event("ready", pid=os.getpid(), recovered=recovered, recorder=backend.name)
+    # recordings a power loss interrupted are checked with the LED saying "do not cut the power"
+    recorder.recover_interrupted_async()
+    recorder.event("ready", pid=os.getpid(), recorder=backend.name)
     try:
         loop.run(stop)
     finally:

@@ -11,17 +11,14 @@ trigger edge      which edge the Bosons see: not measurable from this device alo
                   ZED-thermal stamp offset of a recording: 8.33 ms at 30 Hz if the other edge)
 zed sdk / l4t     /etc/nv_tegra_release is the L4T the images are built for; the ZED SDK version when the
                   host has /usr/local/zed (it is in the zed image otherwise: not measurable here)
-gpio pinmux       the button and LED pins are GPIOs in the kernel's pinmux table
-                  (/sys/kernel/debug/pinctrl/*/pinmux-pins: root and debugfs)
+gpio pinmux       (every pre-flight's: hostchecks) the button and LED pins are GPIOs in the pinmux table
 recorded rate     the newest recording's bytes per second against the budget computed from the rig and
                   recording.write_budget_mb_per_s
-host clock        chrony synchronised: ``chronyc tracking`` leap status Normal, |system time offset| small
+host clock        (every pre-flight's: hostchecks) chrony synchronised, stratum, offset
 """
 from __future__ import annotations
 
 import re
-import shutil
-import subprocess
 from datetime import datetime
 from pathlib import Path
 
@@ -36,12 +33,8 @@ from platform_tools.boson.operations import open_client, read_info
 from platform_tools.boson.telemetry import TelemetryError, decode_frame
 from platform_tools.rig import Rig
 from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
-
-NOT_HERE = "not measurable here: "
-#: largest |host clock offset| from its reference that passes (ZED and thermal stamps pair at the ms scale)
-MAX_CLOCK_OFFSET_S = 1e-3
-#: the AGX Orin developer kit's 40-pin header (BOARD numbering) -> SoC pin (NVIDIA's pinmux sheet, second-hand)
-ORIN_BOARD_PINS = {29: "PQ.05", 31: "PQ.06"}
+# the GPIO pinmux and the host clock are every pre-flight's (hostchecks), in the bring-up report with it
+from firmware.device.hostchecks import NOT_HERE, check_host_clock, check_pinmux  # noqa: F401
 #: how far (a fraction) the measured recorded rate may exceed the computed one
 RATE_TOLERANCE = 0.25
 
@@ -131,34 +124,6 @@ def check_zed_l4t(rig: Rig, root: Path) -> Check:
     return Check("zed sdk / l4t", OK, f"L4T {got} (images: ZED SDK {ZED_SDK}); host: {sdk}")
 
 
-def _pin_regex(soc: str) -> re.Pattern:
-    port, num = re.fullmatch(r"P([A-Z]+)\.(\d+)", soc).groups()
-    return re.compile(rf"\(\S*p{port.lower()}\.?0?{int(num)}\)", re.IGNORECASE)
-
-
-def check_pinmux(rig: Rig, root: Path) -> Check:
-    b = rig.desc.recording.button
-    pins = {"button": b.gpio_pin, "LED": b.led_pin}
-    if b.pin_numbering != "BOARD" or any(p not in ORIN_BOARD_PINS for p in pins.values()):
-        return Check("gpio pinmux", SKIPPED, NOT_HERE + f"no SoC name known for pins {pins} ({b.pin_numbering})")
-    tables = sorted((root / "sys" / "kernel" / "debug" / "pinctrl").glob("*/pinmux-pins"))
-    if not tables:
-        return Check("gpio pinmux", SKIPPED, NOT_HERE + "no /sys/kernel/debug/pinctrl/*/pinmux-pins (run as root "
-                                             "with debugfs mounted)")
-    lines = [ln for t in tables for ln in t.read_text().splitlines()]
-    bad, good = [], []
-    for what, pin in pins.items():
-        soc = ORIN_BOARD_PINS[pin]
-        hit = [ln for ln in lines if _pin_regex(soc).search(ln)]
-        if not hit:
-            bad.append(f"{what} pin {pin} ({soc}): not in the pinmux table")
-        elif not re.search(r"\.gpio\b|function\s+gpio", hit[0].split("):", 1)[-1], re.I):   # claimed by the GPIO driver
-            bad.append(f"{what} pin {pin} ({soc}) is not a GPIO: {hit[0].strip()!r} (flash a pinmux: jetson-io)")
-        else:
-            good.append(f"{what} pin {pin} ({soc}): {hit[0].strip()}")
-    return Check("gpio pinmux", FAILED if bad else OK, "; ".join(bad or good))
-
-
 def check_recorded_rate(rig: Rig, output_dir: Path) -> Check:
     metas = sorted(output_dir.glob(f"*/{metadata.FILE_NAME}")) if output_dir.is_dir() else []
     done = [m for m in metas if (metadata.read(m.parent).get("duration_s") or 0) > 0]
@@ -174,28 +139,12 @@ def check_recorded_rate(rig: Rig, output_dir: Path) -> Check:
     return Check("recorded rate", FAILED if got > limit or got > want * (1 + RATE_TOLERANCE) else OK, detail)
 
 
-def check_host_clock() -> Check:
-    if shutil.which("chronyc") is None:
-        return Check("host clock", SKIPPED, NOT_HERE + "chronyc is not installed (another NTP or PTP daemon: check "
-                                           "it by hand)")
-    r = subprocess.run(["chronyc", "tracking"], capture_output=True, text=True, timeout=10)
-    leap = re.search(r"^Leap status\s*:\s*(.+?)\s*$", r.stdout, re.M)
-    off = re.search(r"^System time\s*:\s*([\d.]+) seconds (fast|slow)", r.stdout, re.M)
-    if r.returncode != 0 or leap is None or off is None:
-        return Check("host clock", FAILED, f"chronyc tracking: {(r.stderr or r.stdout).strip()[:120] or 'no output'}")
-    offset = float(off.group(1))
-    ok = leap.group(1) == "Normal" and offset <= MAX_CLOCK_OFFSET_S
-    return Check("host clock", OK if ok else FAILED,
-                 f"leap status {leap.group(1)}, system time {offset:.6f} s {off.group(2)}"
-                 + ("" if ok else f" (needs Normal and at most {MAX_CLOCK_OFFSET_S:g} s)"))
-
-
 def run(rig: Rig, cameras: dict, *, root: Path, output_dir: Path, frames_dir: Path | None,
         boson: bool = True) -> list[Check]:
     skipped = [Check("usb serial", SKIPPED, "--no-boson")]
     return [*(([check_usb_serial()]) if boson else skipped), check_telemetry(rig, frames_dir),
-            check_trigger_rate(rig, cameras), check_trigger_edge(), check_zed_l4t(rig, root), check_pinmux(rig, root),
-            check_recorded_rate(rig, output_dir), check_host_clock()]
+            check_trigger_rate(rig, cameras), check_trigger_edge(), check_zed_l4t(rig, root),
+            check_recorded_rate(rig, output_dir)]
 
 
 def report_markdown(rig: Rig, checks: list[Check], cameras: dict) -> str:

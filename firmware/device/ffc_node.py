@@ -20,6 +20,7 @@ from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Image
 
+from firmware.device.clockstep import ClockSteps
 from firmware.device.ffc_status import StatusTracker
 
 
@@ -42,8 +43,11 @@ class FfcStatusNode(Node):
             ("image_topic", "image_raw"), ("status_topic", "status"), ("camera_name", "thermal"),
             ("hardware_id", ""), ("telemetry_rows", 2), ("telemetry_location", "bottom"),
             ("publish_period_s", 0.0))}
+        # the clock offset now, as close to usb_cam's start (same launch) as this node gets: host clock
+        # steps after it are in every status message (firmware/device/clockstep.py)
+        clock = ClockSteps()
         self.tracker = StatusTracker(p["camera_name"], str(p["hardware_id"]), int(p["telemetry_rows"]),
-                                     p["telemetry_location"], float(p["publish_period_s"]))
+                                     p["telemetry_location"], float(p["publish_period_s"]), clock)
         self.pub = self.create_publisher(DiagnosticArray, p["status_topic"], 10)
         self.create_subscription(Image, p["image_topic"], self.on_image, qos_profile_sensor_data)
         self.get_logger().info(f"FFC status of {p['image_topic']} -> {p['status_topic']} "

@@ -8,13 +8,18 @@ with its frame exactly.
 
 Values (strings, as DiagnosticStatus carries them): ``ffc_status`` (0 none, 1 imminent, 2 in
 progress, 3 complete: bosonGetFfcStatus's enum), ``ffc_in_progress`` (0/1), ``frame_counter``,
-``frames_since_ffc``, ``missed_frames`` (frames the camera counted that never arrived here).
+``frames_since_ffc``, ``missed_frames`` (frames the camera counted that never arrived here); with a
+clock (`firmware.device.clockstep`), ``realtime_minus_monotonic_ns`` and ``clock_step_ns``: the host
+clock steps since start-up, which the offline tools add to the frame's stamp.
 Level OK; WARN while an FFC is imminent or in progress (the image is frozen); ERROR when a frame
 carries no readable telemetry or its counter does not advance (a stale or repeated frame).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Optional
+
+from firmware.device.clockstep import ClockSteps
 
 from platform_tools.boson.commands import FfcStatus
 from platform_tools.boson.telemetry import EXPECTED_LOCATION, Telemetry, TelemetryError, decode_image_data
@@ -42,6 +47,7 @@ class StatusTracker:
     rows: int
     location: str = EXPECTED_LOCATION
     period_s: float = 0.0
+    clock: Optional[ClockSteps] = None
     _last: Telemetry | None = field(default=None, init=False)
     _last_pub_ns: int | None = field(default=None, init=False)
     _last_state: int | None = field(default=None, init=False)
@@ -74,6 +80,10 @@ class StatusTracker:
 
     def _publish(self, stamp_ns: int, state: int, values: dict, level: int, message: str,
                  force: bool) -> dict | None:
+        if self.clock is not None:
+            clock_values, jumped = self.clock.sample()
+            values = values | clock_values
+            force = force or jumped       # a step is published at the first frame after it
         changed = state != self._last_state
         due = (self.period_s <= 0 or self._last_pub_ns is None
                or stamp_ns - self._last_pub_ns >= self.period_s * 1e9 or stamp_ns < self._last_pub_ns)

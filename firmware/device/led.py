@@ -1,16 +1,30 @@
-"""What the LED shows: one pattern per state, blink codes for errors.
+"""What the LED shows: one pattern per state, blink codes for errors, and whether the power may be cut.
 
-- IDLE       a short blink every 2 s (alive, ready)
-- RECORDING  on
-- STOPPING   fast blink, 5 Hz (closing files: do not cut the power)
-- ERROR      the error's code as N blinks, then a pause, repeated
-- CHECK_OK   three quick blinks (a long press in IDLE ran the pre-flight and all passed)
+- IDLE       a short blink every 2 s (alive, ready)                        safe to cut the power
+- RECORDING  on                                                            do not cut: the open MCAP has no summary
+- STOPPING   fast blink, 5 Hz (finishing: the recorder closing its files,
+             the post-stop check and recovery, recording.json, the files
+             flushed to the drive; also at start-up while the files of a
+             recording interrupted by a power loss are checked)            do not cut the power
+- ERROR      the error's code as N blinks, then a pause, repeated          safe to cut the power (nothing is open)
+- CHECK_OK   three quick blinks (a long press in IDLE ran the pre-flight and all passed)   safe
+
+So the rule a user learns is: **steady or fast blinking, wait; slow or counted blinks, the power may go.**
 """
 from __future__ import annotations
 
 import enum
 
 BLINK_ON_S, BLINK_OFF_S, CODE_PAUSE_S = 0.25, 0.25, 1.5
+#: the states in which cutting the power loses data (an open file, a check or a flush under way)
+DO_NOT_CUT = ("recording", "stopping")
+
+
+def power_may_be_cut(state: str) -> bool:
+    """What the LED pattern of `state` tells the user about the power switch."""
+    if state not in ("idle", "recording", "stopping", "error", "check_ok"):
+        raise ValueError(f"no LED pattern for state {state!r}")
+    return state not in DO_NOT_CUT
 
 
 class ErrorCode(enum.IntEnum):

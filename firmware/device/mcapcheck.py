@@ -1,5 +1,8 @@
 """Check an MCAP file after a recording stops, and recover it when its summary (index) is missing.
 
+The check after a stop is `check_crcs` (firmware/device/mcapverify.py: the summary, the data section CRC
+and the chunk CRCs, in parallel, no message parsed); `check` reads every message (the old check).
+
 An MCAP whose writer was killed (SIGKILL, power loss, a crash) has no footer or summary, and may end
 in the middle of a record. :func:`recover` reads it record by record from the start, keeps every
 schema, channel and message up to the first damaged record (whole chunks only, CRC-checked), and
@@ -8,7 +11,6 @@ writes them to ``<name>.recovered.mcap`` next to the original, which is never mo
 from __future__ import annotations
 
 import struct
-import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,98 +20,11 @@ from mcap.records import Channel, Chunk, Message, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
 
+# the check after a stop lives in mcapverify; its names are here too for the recorder and the tests
+from firmware.device.mcapverify import ChunkError, McapStatus, check_crcs, verify_chunk  # noqa: F401
 from platform_tools.rig.atomic import open_atomic
 
 RECOVERED_SUFFIX = ".recovered.mcap"
-
-
-@dataclass(frozen=True)
-class McapStatus:
-    path: str
-    indexed: bool          # has a footer with a summary section
-    readable: bool         # every message can be read
-    messages: int
-    error: str | None = None
-
-    @property
-    def ok(self) -> bool:
-        return self.indexed and self.readable
-
-    def to_dict(self) -> dict:
-        return {"path": self.path, "indexed": self.indexed, "readable": self.readable,
-                "messages": self.messages, "error": self.error}
-
-
-#: the MCAP Chunk record's opcode, and the fixed part of its body before the compression string:
-#: message_start_time u64, message_end_time u64, uncompressed_size u64, uncompressed_crc u32
-CHUNK_OPCODE = 0x06
-_CHUNK_HEAD = struct.Struct("<QQQI")
-_RECORD_HEAD = struct.Struct("<BQ")
-
-
-class ChunkError(ValueError):
-    """A chunk that is not where the summary says, or whose content does not match its CRC."""
-
-
-def _decompress(compression: str, data: bytes, size: int) -> bytes:
-    if compression == "":
-        return data
-    if compression == "zstd":
-        import zstandard
-        return zstandard.ZstdDecompressor().decompress(data, max_output_size=size)
-    if compression == "lz4":
-        import lz4.frame
-        return lz4.frame.decompress(data)
-    raise ChunkError(f"unknown chunk compression {compression!r}")
-
-
-def verify_chunk(record: bytes) -> bool:
-    """Check one Chunk record (opcode, length, body) against its CRC. True when verified, False when
-    the writer wrote no CRC (0: zstd_fast); ChunkError when it does not match."""
-    opcode, length = _RECORD_HEAD.unpack_from(record)
-    if opcode != CHUNK_OPCODE or length != len(record) - _RECORD_HEAD.size:
-        raise ChunkError(f"not a whole chunk record (opcode {opcode:#x}, length {length})")
-    pos = _RECORD_HEAD.size
-    _, _, size, crc = _CHUNK_HEAD.unpack_from(record, pos)
-    pos += _CHUNK_HEAD.size
-    (n,) = struct.unpack_from("<I", record, pos)
-    compression = record[pos + 4:pos + 4 + n].decode()
-    pos += 4 + n
-    (records_len,) = struct.unpack_from("<Q", record, pos)
-    data = _decompress(compression, record[pos + 8:pos + 8 + records_len], size)
-    if len(data) != size:
-        raise ChunkError(f"decompressed to {len(data)} bytes, the chunk says {size}")
-    if crc == 0:
-        return False
-    if zlib.crc32(data) != crc:
-        raise ChunkError(f"CRC {zlib.crc32(data):08x}, the chunk says {crc:08x}")
-    return True
-
-
-def check_crcs(path: Path) -> McapStatus:
-    """Is the file complete, and does every chunk the summary indexes match its CRC? Reads the summary
-    and each chunk once; no message record is parsed. A file whose chunks carry no CRC is readable
-    but not verified (the error says so)."""
-    try:
-        with open(path, "rb") as f:
-            summary = make_reader(f).get_summary()
-            if summary is None:
-                return McapStatus(str(path), False, False, 0, "no summary section")
-            expected = summary.statistics.message_count if summary.statistics else 0
-            unverified = 0
-            for ci in summary.chunk_indexes:
-                f.seek(ci.chunk_start_offset)
-                record = f.read(ci.chunk_length)
-                try:
-                    unverified += not verify_chunk(record)
-                except (ChunkError, struct.error, UnicodeDecodeError) as exc:
-                    return McapStatus(str(path), True, False, 0, f"chunk at byte {ci.chunk_start_offset}: {exc}")
-            if unverified:
-                return McapStatus(str(path), True, True, expected,
-                                  f"{unverified} of {len(summary.chunk_indexes)} chunks carry no CRC (not verified)")
-            return McapStatus(str(path), True, True, expected)
-    except (McapError, ValueError, EOFError, OSError, struct.error) as exc:
-        return McapStatus(str(path), False, False, 0, f"{type(exc).__name__}: {exc}")
 
 
 def check(path: Path) -> McapStatus:

@@ -8,6 +8,8 @@
 4. trigger      each Boson's ISP frame counter advances at sync.rate_hz (the capture card's trigger)
 5. sync mode    each Boson's external sync mode is sync.boson_mode
 6. telemetry    each Boson's telemetry rows are on when on_device.thermal_telemetry_rows > 0
+7. gpio pinmux  the button and LED pins are GPIOs (hostchecks; skipped without root and debugfs)
+8. host clock   the host clock is synchronised: chrony leap status, stratum, offset (hostchecks)
 
 Camera checks go through the Boson tooling (platform_tools.boson); with ``boson=False`` they are
 reported as skipped, never as passed.
@@ -18,7 +20,7 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from firmware.device import bosonprobe
+from firmware.device import bosonprobe, hostchecks
 from firmware.device.storage import GB, free_bytes, mount_point
 from platform_tools.rig import Rig
 from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
@@ -74,11 +76,11 @@ def check_video_nodes(rig: Rig, dev_dir: Path) -> Check:
 
 
 def run_preflight(rig: Rig, output_dir: Path | None = None, *, boson: bool = True,
-                  dev_dir: Path = Path("/dev")) -> Report:
+                  dev_dir: Path = Path("/dev"), root: Path = Path("/")) -> Report:
     output_dir = Path(output_dir or rig.desc.recording.output_dir)
     report = Report()
     report.checks += [check_data_drive(rig, output_dir), check_free_space(rig, output_dir),
-                      check_video_nodes(rig, dev_dir)]
+                      check_video_nodes(rig, dev_dir), *hostchecks.run(rig, root)]
     if boson:
         report.checks += bosonprobe.checks(rig, dev_dir, report.cameras)
     else:

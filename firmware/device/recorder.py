@@ -30,7 +30,7 @@ from firmware.device.bagproc import Backend, BagSpec, RecorderProcess, StopResul
 from firmware.device.button import Button, Press
 from firmware.device.gpio import Gpio
 from firmware.device.preflight import Report
-from firmware.device.storage import GB, DiskWatchdog
+from firmware.device.storage import GB, DiskWatchdog, sync_tree
 from firmware.device.topics import recorded_topics
 
 log = logging.getLogger("platform_tools.recorder")
@@ -230,6 +230,10 @@ class Recorder:
             metadata.write(session.folder, meta)
         except OSError as exc:
             self.fault(led.ErrorCode.DISK_FULL, f"cannot write {session.folder / metadata.FILE_NAME}: {exc}")
+        try:   # on the drive before the LED leaves STOPPING (the power may be cut after that)
+            self.event("flushed", name=session.name, entries=sync_tree(session.folder))
+        except OSError as exc:
+            self.fault(led.ErrorCode.DISK_FULL, f"cannot flush {session.folder} to the drive: {exc}")
         self.finished.append(meta)
         return damaged
 
@@ -277,6 +281,23 @@ class Recorder:
         self.state, self.error_code = State.ERROR, code
 
     # ------------------------------------------------------------------ after a power loss
+    def recover_interrupted_async(self) -> None:
+        """`recover_interrupted` in the worker thread, the LED showing STOPPING (do not cut the power)
+        meanwhile; presses are ignored until it is done, then the state is IDLE."""
+        with self._lock:
+            if self.state is not State.IDLE:
+                return
+            self.state = State.STOPPING
+
+        def work() -> None:
+            try:
+                self.recover_interrupted()
+            finally:
+                with self._lock:
+                    self.state = State.IDLE
+        self._worker = threading.Thread(target=work, name="recorder-recover", daemon=True)
+        self._worker.start()
+
     def recover_interrupted(self) -> list[str]:
         """Finish recordings a previous run left with status ``recording``."""
         done = []

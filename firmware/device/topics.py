@@ -6,6 +6,7 @@ bandwidth budget (`firmware/budget.py`) prices the same list.
 """
 from __future__ import annotations
 
+from firmware.device import health
 from platform_tools.rig import Rig
 
 #: the ROS 2 topics of the static transforms (the thermal frames: launch/thermal.launch.py) and of
@@ -37,10 +38,23 @@ def camera_image_topics(rig: Rig) -> dict[str, str]:
             "thermal_right": t.thermal_right}
 
 
+def health_cameras(rig: Rig) -> dict[str, str]:
+    """Each camera the health publisher watches, by its upstream name (zed, thermal_left, thermal_right),
+    with the camera_info topic it counts frames on (one per frame, beside the image)."""
+    t = rig.desc.on_device.topics
+    return {rig.desc.on_device.zed_camera_name: camera_info_topic(t.zed_left),
+            "thermal_left": camera_info_topic(t.thermal_left), "thermal_right": camera_info_topic(t.thermal_right)}
+
+
+def health_topics(rig: Rig) -> tuple[str, ...]:
+    """/health/<camera>/frequency and /health/<camera>/status of every camera, as upstream names them."""
+    return tuple(topic for cam in health_cameras(rig) for topic in health.topics(cam).values())
+
+
 def recorded_topics(rig: Rig) -> tuple[str, ...]:
     """Every topic `ros2 bag record` is given, in a stable order, without duplicates."""
     t = rig.desc.on_device.topics
     names = [getattr(t, f) for f in t.__dataclass_fields__ if f != "zed_depth" or records_depth(rig)]
     names += [camera_info_topic(v) for v in camera_image_topics(rig).values()]
-    names += [TF_STATIC, DIAGNOSTICS]
+    names += [TF_STATIC, DIAGNOSTICS, *health_topics(rig)]
     return tuple(dict.fromkeys(names))

@@ -2,11 +2,15 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import tempfile
 from pathlib import Path
 
+from firmware import pin
 from firmware.checks import FAILED, SKIPPED, Check, run_checks
 from firmware.render import write
+from platform_tools.rig import atomic, load_rig
 from platform_tools.rig.conventions import (CheckFailed, UserError, add_output_options, add_rig_options,
     print_json, rig_from_args)
 
@@ -32,6 +36,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_output_options(p)
     p.add_argument("folder", metavar="DIR", type=Path, help="a folder written by `firmware render`")
     p.set_defaults(handler=cmd_check)
+
+    p = fsub.add_parser("pin", help="the base image digests and download checksums the image builds verify",
+                        description="List what the Dockerfiles pull (base images) and download (the ZED SDK "
+                                    "installer) with the rig key pinning each. --refresh asks each registry for "
+                                    "the image's digest (Docker Registry HTTP API v2) and downloads each archive "
+                                    "to hash it, then writes the values into the rig file: only those values "
+                                    "change, comments and layout are kept, the file is replaced whole.",
+                        epilog="Exit 0 ok; 1 without --refresh when a pin is still unset; 2 on bad input or when "
+                               "a host cannot be reached (one line naming it; the rig file is left as it was).")
+    add_rig_options(p)
+    add_output_options(p)
+    p.add_argument("--refresh", action="store_true", help="fetch every pin now and write it into the rig file")
+    p.add_argument("--mirror", metavar="HOST=URL", action="append", default=[],
+                   help="reach HOST at URL instead (a registry mirror or proxy), e.g. "
+                        "registry-1.docker.io=https://mirror.example (repeatable)")
+    p.set_defaults(handler=cmd_pin)
 
 
 def _print_results(results: list[Check]) -> None:
@@ -85,3 +105,58 @@ def cmd_check(args: argparse.Namespace) -> int:
     if bad:
         raise CheckFailed(f"{args.folder}: {len(bad)} check(s) failed: {', '.join(r.name for r in bad)}")
     return 0
+
+
+def _mirrors(specs: list[str]) -> dict[str, str]:
+    out = {}
+    for spec in specs:
+        host, sep, url = spec.partition("=")
+        if not sep or not host or not url.startswith(("http://", "https://")):
+            raise UserError(f"--mirror {spec}: expected HOST=http(s)://URL")
+        out[host] = url
+    return out
+
+
+def cmd_pin(args: argparse.Namespace) -> int:
+    rig = rig_from_args(args)
+    mirrors = _mirrors(args.mirror)
+    pins = pin.pins(rig)
+    if not args.refresh:
+        if args.json:
+            print_json({"rig_file": str(rig.path), "pins": [p.to_dict() for p in pins]})
+        else:
+            for p in pins:
+                print(f"  {'.'.join(p.key):40s} {p.current or 'NOT SET':72s} {p.source}")
+        unset = [".".join(p.key) for p in pins if not p.current]
+        if unset:
+            raise CheckFailed(f"{len(unset)} pin(s) not set: {', '.join(unset)}; run `platform_tools firmware pin "
+                              f"--refresh` where there is network")
+        return 0
+    if args.overrides:
+        raise UserError("--set with --refresh: the pins are written into the rig file; edit the file instead")
+    try:
+        values = {p.key: pin.fetch(p, mirrors) for p in pins}
+        text = pin.set_values(rig.path.read_text(), values)
+    except pin.PinError as exc:
+        raise UserError(f"firmware pin: {exc}; {rig.path} left unchanged") from None
+    _write_validated(rig.path, text)
+    doc = {"rig_file": str(rig.path), "pins": [{"key": ".".join(p.key), "source": p.source, "old": p.current,
+                                                "new": values[p.key]} for p in pins]}
+    if args.json:
+        print_json(doc)
+    elif not args.quiet:
+        for row in doc["pins"]:
+            print(f"  {row['key']:40s} {row['new']}" + ("" if row["old"] == row["new"] else "   (changed)"))
+    return 0
+
+
+def _write_validated(path: Path, text: str) -> None:
+    """Replace the rig file with `text` once it loads as a rig description (the same loader)."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".yaml", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        load_rig(tmp)
+    finally:
+        os.unlink(tmp)
+    atomic.write_text(path, text)

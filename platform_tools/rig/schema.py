@@ -413,8 +413,8 @@ class Images:
 @dataclass(frozen=True)
 class Downloads:
     """What the image builds download, and how each download is verified."""
-    #: sha256 of the ZED SDK installer (download.stereolabs.com); null until someone with network
-    #: hashes the installer (docs/on-device.md): the zed image build refuses to run without it
+    #: sha256 of the ZED SDK installer (download.stereolabs.com); null until `platform_tools firmware
+    #: pin --refresh` runs where there is network: the zed image build refuses to run without it
     zed_sdk_sha256: Optional[str]
     #: the OpenPGP fingerprint of the ROS 2 apt key (the key file changes when its expiry is extended;
     #: the fingerprint does not)
@@ -424,7 +424,7 @@ class Downloads:
 @dataclass(frozen=True)
 class BaseImages:
     """Digests (sha256:...) of the base images the Dockerfiles start from; null: pinned by tag only
-    until someone with network reads them (docs/on-device.md)."""
+    until `platform_tools firmware pin --refresh` asks the registries (docs/on-device.md)."""
     l4t_jetpack_digest: Optional[str]
     ros_digest: Optional[str]
 
@@ -446,7 +446,7 @@ class OnDevice:
     ros_domain_id: Annotated[int, Ge(0), Le(232)]
     #: localhost: DDS discovers and talks only on the Orin; subnet: also to peers on its networks (Wi-Fi)
     dds_discovery: Literal["localhost", "subnet"]
-    #: SROS2: every node in its enclave, keys from `bin/sros2-keys.sh` (Enforce strategy)
+    #: SROS2: every node in its enclave, keys from `rig-device sros2-keys` (Enforce strategy)
     sros2_enclaves: bool
     #: compose services allowed privileged mode and host pid (the ZED X: docs/on-device.md says why)
     privileged_services: tuple[str, ...]

@@ -51,7 +51,7 @@ def make_recorder(data_drive, dev_dir):
     def make(misbehave: str = "none", *extra: str) -> Recorder:
         rig = load_rig(None, rig_overrides(data_drive, *extra))
         out = Path(rig.desc.recording.output_dir)
-        # 13 recorded topics (camera_info, /tf_static, /diagnostics: issue 18), each a mono16 image in the
+        # 19 recorded topics (camera_info, /tf_static, /diagnostics, /health/*: issue 18), each a mono16 image in the
         # fake recorder: 10 Hz keeps its SIGINT stop inside the short grace on a loaded machine
         rec = Recorder(rig, FakeBackend(misbehave, ("--rate-hz", "10")),
                        preflight=lambda: run_preflight(rig, out, boson=False, dev_dir=dev_dir))

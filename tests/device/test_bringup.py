@@ -156,3 +156,29 @@ def test_bring_up_sees_a_usb_serial_string_that_is_not_the_camera_serial(overrid
     assert r.returncode == 1
     assert checks["usb serial"]["status"] == "failed"
     assert "answers SN 93588, its USB serial string is 12345" in checks["usb serial"]["detail"]
+
+
+def test_stratum_16_fails_even_with_a_small_offset(tmp_path, monkeypatch):
+    b = tmp_path / "bin"
+    b.mkdir()
+    (b / "chronyc").write_text("#!/bin/sh\ncat <<'X'\nReference ID    : 7F7F0101 ()\nStratum         : 16\n"
+                               "System time     : 0.000000100 seconds fast of NTP time\nLeap status     : Normal\nX\n")
+    (b / "chronyc").chmod(0o755)
+    monkeypatch.setenv("PATH", f"{b}:{os.environ['PATH']}")
+    c = bringup.check_host_clock()
+    assert c.status == FAILED and "stratum 16 (unsynchronised)" in c.detail
+
+
+@pytest.mark.slow
+def test_the_regular_doctor_checks_the_pinmux_and_the_clock(overrides, dev_dir, tmp_path, monkeypatch):
+    """Not only --bring-up: a pin muxed to another function and an unsynchronised clock each fail doctor."""
+    _chronyc(tmp_path, monkeypatch, leap="Not synchronised")
+    sets = [a for o in overrides() for a in ("--set", o)]
+    r = subprocess.run([sys.executable, "-m", "firmware.cli", "doctor", "--json", "--no-boson", "--dev-dir",
+                        str(dev_dir), "--root", str(_root(tmp_path, pin31="i2s")), *sets],
+                       capture_output=True, text=True, timeout=90, env=os.environ)
+    checks = {c["name"]: c for c in json.loads(r.stdout)["checks"]}
+    assert r.returncode == 1
+    assert checks["gpio pinmux"]["status"] == "failed" and "LED pin 31 (PQ.06)" in checks["gpio pinmux"]["detail"]
+    assert checks["host clock"]["status"] == "failed" and "not synchronised" in checks["host clock"]["detail"]
+    assert not (tmp_path / "bringup-report.json").exists()           # no report without --bring-up

@@ -94,9 +94,10 @@ def test_the_button_loop_with_a_bouncing_button_starts_one_recording(make_record
     run(0.4, level=1)                   # released
     assert rec.state is State.RECORDING
     assert gpio.levels[31] == 1         # LED on while recording
+    wait_written(rec)                   # the recorder is up (its SIGINT handler installed) before the stop
     run(0.4, level=0)
     run(0.4, level=1)
-    assert wait_for(lambda: rec.state is State.IDLE)
+    assert wait_for(lambda: rec.state is State.IDLE, timeout=60)
     assert len(rec.finished) == 1 and len([e for e in events(rec) if e["event"] == "recording started"]) == 1
 
 

@@ -3,6 +3,7 @@ test, SIGTERM during a recording, and `platform_tools doctor` against emulated B
 from __future__ import annotations
 
 import json
+import shutil
 import os
 import signal
 import subprocess
@@ -47,7 +48,10 @@ def test_sigterm_during_a_recording_stops_it_cleanly(data_drive, dev_dir, tmp_pa
         assert wait_for(lambda: any(e["event"] == "ready" for e in events(out))), proc.stderr
         press(pins)
         assert wait_for(lambda: (pins / "pin31").exists() and (pins / "pin31").read_text().strip() == "1")
-        time.sleep(1.0)
+        # the recorder has its SIGINT handler once it says it records (on a loaded machine its start-up
+        # takes seconds: a fixed sleep sent SIGINT to a process still importing)
+        assert wait_for(lambda: any("fake_recorder: recording" in f.read_text() for f in out.glob("*/recorder.log")),
+                        timeout=60)
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(timeout=20) == 0
     finally:
@@ -55,7 +59,7 @@ def test_sigterm_during_a_recording_stops_it_cleanly(data_drive, dev_dir, tmp_pa
             proc.kill()
     [meta_file] = list(out.glob("*/recording.json"))
     meta = json.loads(meta_file.read_text())
-    assert meta["status"] == "stopped" and meta["stop"]["reason"] == "service stopped (SIGTERM)"
+    assert meta["status"] == "stopped" and meta["stop"]["reason"] == "service stopped (SIGTERM)", (meta["stop"], meta["faults"])
     assert meta["stop"]["signals"] == ["SIGINT"]
     assert all(mcapcheck.check(meta_file.parent / f["file"]).ok for f in meta["files"])
     assert (pins / "pin31").read_text().strip() == "0"           # LED off when the service is gone
@@ -99,9 +103,13 @@ def doctor(overrides, dev_dir, *extra):
 
 @pytest.mark.slow
 def test_doctor_passes_with_cameras_triggered_in_slave_mode(overrides, dev_dir, bosons):
-    r, checks = doctor(overrides, dev_dir)
+    r, checks = doctor(overrides, dev_dir, "--root", str(dev_dir.parent))     # no pinmux table there
     assert r.returncode == 0, r.stdout + r.stderr
-    assert {n: c["status"] for n, c in checks.items()} == dict.fromkeys(checks, "ok")
+    host = {"gpio pinmux", "host clock"}   # the host's: not measurable on this machine (tests/device/test_bringup.py)
+    assert {n: c["status"] for n, c in checks.items() if n not in host} == dict.fromkeys(set(checks) - host, "ok")
+    if shutil.which("chronyc") is None:
+        assert checks["host clock"]["status"] == "skipped"
+    assert checks["gpio pinmux"]["status"] == "skipped" and "not measurable here" in checks["gpio pinmux"]["detail"]
     assert json.loads(r.stdout)["cameras"]["left"]["serial"] == 93588
 
 

@@ -97,7 +97,7 @@ def test_sros2_enclaves_put_every_ros_service_in_its_enclave(tmp_path):
     r = load_rig(None, [*SERIALS, "on_device.sros2_enclaves=true"])
     write(r, tmp_path / "fw")
     services = yaml.safe_load((tmp_path / "fw" / "compose.yaml").read_text())["services"]
-    for name in ("zed", "thermal_left", "thermal_right", "recorder"):
+    for name in ("zed", "thermal_left", "thermal_right", "recorder", "health_topics"):
         env = services[name]["environment"]
         assert env["ROS_SECURITY_STRATEGY"] == "Enforce" and env["ROS_SECURITY_ENCLAVE_OVERRIDE"] == f"/rgbt/{name}"
     assert privilege.check_dds(tmp_path / "fw", r).status == OK

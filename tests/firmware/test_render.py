@@ -260,7 +260,7 @@ def test_the_images_install_only_firmware_and_what_it_imports(tmp_path):
     assert {p for p in packages if p.count("/") == 1 and p.startswith("platform_tools/")} == \
         {"platform_tools/rig", "platform_tools/boson"}
     modules = sorted(".".join(p.relative_to(src).with_suffix("").parts) for p in (src / "firmware").rglob("*.py")
-                     if p.name != "__init__.py" and p.stem != "ffc_node")     # ffc_node needs rclpy
+                     if p.name != "__init__.py" and p.stem not in ("ffc_node", "health_node"))   # need rclpy
     probe = ("import importlib, sys\n"
              f"for m in {modules!r}: importlib.import_module(m)\n"
              "ours = [m for m in sys.modules if m.split('.')[0] in ('firmware', 'platform_tools', 'calibration', "
@@ -280,3 +280,24 @@ def test_the_device_command_is_what_compose_runs(default_render):
     assert compose["recorder"]["command"][1:3] == ["rig-device", "record-service"]
     assert compose["health"]["command"][1:3] == ["rig-device", "doctor"]
     assert 'rig-device = "firmware.cli:main"' in (Path(__file__).parents[2] / "pyproject.toml").read_text()
+
+
+def test_the_images_install_only_the_device_console_script(tmp_path):
+    """The images' pyproject.toml declares rig-device only: platform_tools and calibrate import modules
+    the images do not have. A hand edit adding one fails `firmware check`."""
+    import tomllib
+    from firmware.checks import check_device_install
+    rig = load_rig(None, [SERIALS[1], SERIALS[3]])
+    out = tmp_path / "fw"
+    write(rig, out)
+    pyproject = out / "docker" / "src" / "rgbt-rig" / "pyproject.toml"
+    doc = tomllib.loads(pyproject.read_text())
+    repo = tomllib.loads((Path(__file__).parents[2] / "pyproject.toml").read_text())
+    assert set(repo["project"]["scripts"]) >= {"platform_tools", "calibrate", "rig-device"}
+    assert doc["project"]["scripts"] == {"rig-device": repo["project"]["scripts"]["rig-device"]}
+    assert doc["project"]["version"] == repo["project"]["version"] and doc["project"]["dependencies"] == []
+    assert check_device_install(out, rig).status == OK
+    pyproject.write_text(pyproject.read_text().replace(
+        "[project.scripts]\n", '[project.scripts]\nplatform_tools = "platform_tools.cli.main:main"\n'))
+    c = check_device_install(out, rig)
+    assert c.status == FAILED and "platform_tools.cli.main is not in the images' source" in c.detail

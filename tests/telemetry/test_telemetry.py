@@ -158,3 +158,49 @@ def test_the_node_module_is_only_glue():
         {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
     assert {"rclpy", "sensor_msgs.msg", "diagnostic_msgs.msg", "firmware.device.ffc_status"} <= imported
     assert "StatusTracker" in src and "def main" in src
+
+
+# ----------------------------------------------------------------------------- host clock steps (issue 18)
+def test_a_host_clock_step_is_in_the_status_and_undoes_the_thermal_stamp_error():
+    """A simulated host: monotonic time m, realtime = m + offset, the offset stepped by +2.5 s (chrony's
+    makestep) at frame 50. usb_cam's stamp is m + the offset at its start; the truth is the realtime."""
+    from firmware.device.clockstep import ClockSteps, corrected_stamp_ns
+    offset0, step = 1_700_000_000_000_000_000, 2_500_000_000
+    frame = {"k": 0}
+
+    def offset_now() -> int:        # what CLOCK_REALTIME - CLOCK_MONOTONIC reads at the current frame
+        return offset0 + (step if frame["k"] >= 50 else 0) + 3 * frame["k"]     # + a slew of 3 ns per frame
+
+    clock = ClockSteps(offset_now)                 # the node starts with usb_cam: offset0
+    tr = StatusTracker("thermal_left", "93588", rows=2, clock=clock)
+    errors_before, errors_after = [], []
+    for k in range(100):
+        frame["k"] = k
+        mono = 5_000_000_000 + k * 33_333_333
+        usb_cam_stamp = mono + offset0             # its shift was computed once, at start
+        truth = mono + offset_now()
+        msg = tr.on_frame(usb_cam_stamp, frame_bytes(1000 + k, FfcStatus.NONE, 900), 514, 1280)
+        v = values(msg)
+        assert int(v["realtime_minus_monotonic_ns"]) == offset_now()
+        errors_before.append(truth - usb_cam_stamp)
+        errors_after.append(truth - corrected_stamp_ns(usb_cam_stamp, int(v["clock_step_ns"])))
+    assert max(errors_before[50:]) >= step                 # the uncorrected stamps are 2.5 s off after the step
+    assert errors_after == [0] * 100                       # the corrected ones are exact
+
+
+def test_a_step_is_published_at_once_even_when_rate_limited():
+    from firmware.device.clockstep import ClockSteps
+    offsets = iter([0] + [0] * 10 + [-7_000_000] * 20)     # start, 10 frames, then the clock steps back 7 ms
+    tr = StatusTracker("thermal_right", "93599", rows=2, period_s=10.0, clock=ClockSteps(lambda: next(offsets)))
+    out = [tr.on_frame(int(k * 1e9 / 30), frame_bytes(1000 + k, FfcStatus.NONE, 900), 514, 1280) for k in range(30)]
+    published = [k for k, m in enumerate(out) if m is not None]
+    assert published == [0, 10] and values(out[10])["clock_step_ns"] == "-7000000"
+
+
+def test_the_offset_is_read_between_two_monotonic_reads():
+    import time
+    from firmware.device.clockstep import realtime_minus_monotonic_ns
+    reads = {time.CLOCK_MONOTONIC: iter([100, 140]), time.CLOCK_REALTIME: iter([1_000_120])}
+    assert realtime_minus_monotonic_ns(lambda c: next(reads[c])) == 1_000_120 - 120
+    real = realtime_minus_monotonic_ns()
+    assert abs(real - (time.time_ns() - time.monotonic_ns())) < 50_000_000    # the same clocks, read again
