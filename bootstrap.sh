@@ -21,11 +21,14 @@ cd "$(dirname "$0")"
 #   chromium chromium-driver  the real browser the generated web pages are tested in
 #   shellcheck docker-compose  check the generated on-device files: shell entry scripts, and the
 #                           compose file through `docker-compose config` (no Docker engine needed)
+#   python3-cryptography openssl  SROS2 keys without ROS (rig-device sros2-keys), and the independent
+#                           tool (openssl verify / smime -verify) the tests check those keys with
 DEBIAN_PACKAGES=(
     python3-venv python3-mrcal mrcal mrgingham python3-numpy
     python3-dev build-essential libgl1 libglib2.0-0
     chromium chromium-driver
     shellcheck docker-compose
+    python3-cryptography openssl
 )
 
 say() { printf 'bootstrap: %s\n' "$*" >&2; }
