@@ -45,7 +45,8 @@ class Detection:
         return np.where(self.level >= 0, 2.0 ** (-self.level.astype(float)), 0.0)
 
 
-def _empty(board, reason, n_cand=0) -> Detection:
+def empty_detection(board, reason, n_cand=0) -> Detection:
+    """No board in this image, and why."""
     n = board[0] * board[1]
     return Detection(board, np.full((n, 2), np.nan), -np.ones(n, int), reason, n_cand)
 
@@ -84,56 +85,107 @@ def touched(f: np.ndarray, xy: np.ndarray, spacing: np.ndarray) -> np.ndarray:
     return ok & (rng > OCCLUDER_RANGE * np.nanmedian(rng))
 
 
+@dataclass(frozen=True)
+class Lattice:
+    """What every target's detector starts from: the destriped image ``f``, the contrast-normalised
+    smoothed image ``g``, the saddle response ``S``, the local contrast and pixel noise, and the
+    labelled corner lattice (``xy`` (m, 2), ``ij`` (m, 2) lattice labels with an arbitrary origin and
+    orientation)."""
+    f: np.ndarray
+    g: np.ndarray
+    S: np.ndarray
+    local_sd: np.ndarray
+    noise: float
+    n_candidates: int
+    xy: np.ndarray
+    ij: np.ndarray
+
+
+def find_lattice(image: np.ndarray, board: tuple[int, int]) -> tuple[Lattice | None, str]:
+    """Candidates, linked and labelled into the largest lattice, grown (never past max(W, H) + 1
+    lattice steps); (None, why) when there is no grid of corners."""
+    W, H = int(board[0]), int(board[1])
+    f = normalise(to_float(image))
+    if float(f.max() - f.min()) <= 0:
+        return None, "the image is flat (every pixel the same)"
+    noise = image_noise(f)
+    cands, g, S, local_sd = find_candidates(f, noise=noise)
+    if len(cands.xy) < MIN_CORNERS:
+        none = np.zeros((0, 2))
+        return Lattice(f, g, S, local_sd, noise, len(cands.xy), none, none.astype(int)), \
+            "no checkerboard corners found"
+    slots = link(cands)
+    idx, ij = label(cands, slots)
+    if len(idx) < MIN_CORNERS:
+        return Lattice(f, g, S, local_sd, noise, len(cands.xy), cands.xy[:0], ij[:0]), "no grid of corners found"
+    # fill the holes and extend the runs the linking missed
+    xy, ij, _ = grow(g, S, cands.xy[idx], ij, cands.strength[idx], (W, H))
+    lat = Lattice(f, g, S, local_sd, noise, len(cands.xy), xy, ij)
+    if len(xy) < MIN_CORNERS:
+        return lat, "no grid of corners found"
+    return lat, ""
+
+
+def corner_spacing(xy: np.ndarray, ij: np.ndarray) -> np.ndarray:
+    """Each corner's distance to its nearest labelled grid neighbour (8 px when it has none)."""
+    pos = {tuple(k): p for k, p in zip(ij.tolist(), xy.tolist())}
+    return np.array([min([math.sqrt((pos[n][0] - p[0]) ** 2 + (pos[n][1] - p[1]) ** 2) for n in
+                          ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)) if n in pos] or [8.0])
+                     for (i, j), p in zip(ij.tolist(), xy.tolist())])
+
+
+def finish(lat: Lattice, xy: np.ndarray, ij: np.ndarray, board: tuple[int, int],
+           absent: np.ndarray | None = None) -> Detection:
+    """From a grid in board coordinates to the Detection: sub-pixel refinement, lattice and touch
+    checks, completion of the missing board corners, mrcal levels. ``absent`` (H*W,) marks corners
+    the target does not have (a marker's own squares): never reported, even if the image shows one."""
+    W, H = board
+    spacing = corner_spacing(xy, ij)
+    fine = refine(lat.f, xy, spacing)
+    fine[lattice_outliers(fine, ij)] = np.nan
+    fine[touched(lat.f, fine, spacing)] = np.nan
+    ok = np.isfinite(fine[:, 0])
+    # board corners still missing (too faint for the growth, dropped by the refinement): predicted
+    # from the anchored grid, kept where the image shows that corner (complete.py)
+    fine, ij, _ = complete(lat.f, lat.S, fine[ok], ij[ok], (W, H), lat.noise)
+    k = ij[:, 1] * W + ij[:, 0]
+    if absent is not None:
+        keep = ~absent[k]
+        fine, k = fine[keep], k[keep]
+    corners = np.full((W * H, 2), np.nan)
+    lv = -np.ones(W * H, int)
+    corners[k] = fine
+    lv[k] = levels(lat.f, fine, lat.local_sd, lat.noise)
+    return Detection((W, H), corners, lv, "", lat.n_candidates)
+
+
+def check_board_size(W: int, H: int, minimum: int = 2) -> tuple[int, int]:
+    W, H = int(W), int(H)
+    if W < minimum or H < minimum:
+        raise ValueError(f"board {W}x{H}: needs at least {minimum}x{minimum} inner corners")
+    return W, H
+
+
 def detect_corners(image: np.ndarray, board: tuple[int, int] = (10, 7)) -> Detection:
     """Find the W x H inner corners of a (heated) checkerboard in a thermal image (16-bit counts,
     8-bit, or float; one channel). Partial and occluded boards give the corners seen, at their board
     coordinates; corner (0, 0) is the top-left corner as seen in the image (see grid.py)."""
-    W, H = int(board[0]), int(board[1])
-    if W < 2 or H < 2:
-        raise ValueError(f"board {W}x{H}: needs at least 2x2 inner corners")
-    f = normalise(to_float(image))
-    if float(f.max() - f.min()) <= 0:
-        return _empty((W, H), "the image is flat (every pixel the same)")
-    noise = image_noise(f)
-    cands, g, S, local_sd = find_candidates(f, noise=noise)
-    if len(cands.xy) < MIN_CORNERS:
-        return _empty((W, H), "no checkerboard corners found", len(cands.xy))
-    slots = link(cands)
-    idx, ij = label(cands, slots)
-    if len(idx) < MIN_CORNERS:
-        return _empty((W, H), "no grid of corners found", len(cands.xy))
-    # fill the holes and extend the runs the linking missed
-    xy, ij, _ = grow(g, S, cands.xy[idx], ij, cands.strength[idx], (W, H))
-    if len(xy) < MIN_CORNERS:
-        return _empty((W, H), "no grid of corners found", len(cands.xy))
+    W, H = check_board_size(*board)
+    lat, why = find_lattice(image, (W, H))
+    if why:
+        return empty_detection((W, H), why, lat.n_candidates if lat is not None else 0)
+    xy, ij, n_cand = lat.xy, lat.ij, lat.n_candidates
     ij, why = orient(xy, ij, W, H)
     if why:
-        return _empty((W, H), why, len(cands.xy))
+        return empty_detection((W, H), why, n_cand)
     keep = ij[:, 0] >= 0
     xy, ij = xy[keep], ij[keep]
     if len(xy) < MIN_CORNERS:
-        return _empty((W, H), "no grid of corners found", len(cands.xy))
+        return empty_detection((W, H), "no grid of corners found", n_cand)
     ij = ij - ij.min(axis=0)
     if ij[:, 0].max() < 1 or ij[:, 1].max() < 1:
-        return _empty((W, H), "only one row of corners found", len(cands.xy))
-    ij, why = anchor(g, xy, ij, W, H)
+        return empty_detection((W, H), "only one row of corners found", n_cand)
+    ij, why = anchor(lat.g, xy, ij, W, H)
     if ij is None:
-        return _empty((W, H), why, len(cands.xy))
-    # spacing to the nearest grid neighbour, for window sizes
-    pos = {tuple(k): p for k, p in zip(ij.tolist(), xy.tolist())}
-    spacing = np.array([min([math.sqrt((pos[n][0] - p[0]) ** 2 + (pos[n][1] - p[1]) ** 2) for n in
-                             ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)) if n in pos] or [8.0])
-                        for (i, j), p in zip(ij.tolist(), xy.tolist())])
-    fine = refine(f, xy, spacing)
-    fine[lattice_outliers(fine, ij)] = np.nan
-    fine[touched(f, fine, spacing)] = np.nan
-    ok = np.isfinite(fine[:, 0])
-    # board corners still missing (too faint for the growth, dropped by the refinement): predicted
-    # from the anchored grid, kept where the image shows that corner (complete.py)
-    fine, ij, _ = complete(f, S, fine[ok], ij[ok], (W, H), noise)
-    corners = np.full((W * H, 2), np.nan)
-    lv = -np.ones(W * H, int)
-    k = ij[:, 1] * W + ij[:, 0]
-    corners[k] = fine
-    lv[k] = levels(f, fine, local_sd, noise)
-    return Detection((W, H), corners, lv, "", len(cands.xy))
+        return empty_detection((W, H), why, n_cand)
+    return finish(lat, xy, ij, (W, H))

@@ -192,6 +192,13 @@ def _step_vectors(xy: np.ndarray, ij: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return (np.mean(di, axis=0) if di else zero), (np.mean(dj, axis=0) if dj else zero)
 
 
+def right_handed(xy: np.ndarray, ij: np.ndarray) -> np.ndarray:
+    """The labels with their axes swapped if the grid they make is mirrored (the board is always seen
+    from the front)."""
+    di, dj = _step_vectors(xy, ij)
+    return ij[:, ::-1].copy() if di[0] * dj[1] - di[1] * dj[0] < 0 else ij
+
+
 TRIM_EXTRA = 2            # at most this many surplus lattice lines along an axis are trimmed off
 TRIM_MAX_DROPPED = 3      # ... holding at most this many corners in all (clutter, not board)
 
@@ -301,6 +308,13 @@ def _end_state(g: np.ndarray, pos: dict, axis: int, end: int, n_other: int) -> s
     if a_out > 0.7 * a_ref:
         return "open"
     return "unknown"
+
+
+def board_edge_seen(g: np.ndarray, xy: np.ndarray, ij: np.ndarray, axis: int, end: int) -> bool:
+    """Whether the board visibly ends just past the grid's first (``end`` 0) or last (1) lattice line
+    along ``axis`` (labels ``ij`` starting at 0): _end_state says 'closed'."""
+    pos = {tuple(k): np.asarray(p, float) for k, p in zip(ij.tolist(), xy)}
+    return _end_state(g, pos, axis, end, int(ij[:, 1 - axis].max()) + 1).startswith("closed")
 
 
 def _next_line_inside(shape, pos: dict, axis: int, end: int, margin: float = 4.0) -> float:
