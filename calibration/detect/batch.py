@@ -7,8 +7,9 @@ from typing import Sequence
 
 from platform_tools.rig.progress import progress
 
-from .detector import Detection, detect_corners
+from .detector import Detection
 from .images import ImageError, load_image
+from .targets import check_target_board, detect_target
 
 
 @dataclass(frozen=True)
@@ -20,9 +21,10 @@ class FileDetection:
 
 
 def detect_files(files: Sequence[Path], board: tuple[int, int], *, strict: bool = True,
-                 show_progress: bool = True) -> list[FileDetection]:
-    """Detect the board in every file. ``strict``: a bad file raises ImageError (the caller reports
-    it and stops); otherwise it is recorded and skipped."""
+                 show_progress: bool = True, target: str = "checkerboard") -> list[FileDetection]:
+    """Detect the board (a ``target``: calibration/targets) in every file. ``strict``: a bad file
+    raises ImageError (the caller reports it and stops); otherwise it is recorded and skipped."""
+    check_target_board(target, board)
     out = []
     items = progress(files, desc="detecting", total=len(files), unit="image") if show_progress else files
     for path in items:
@@ -33,6 +35,6 @@ def detect_files(files: Sequence[Path], board: tuple[int, int], *, strict: bool 
                 raise
             out.append(FileDetection(Path(path), None, str(exc)))
             continue
-        det = detect_corners(img, board)
+        det = detect_target(img, board, target)
         out.append(FileDetection(Path(path), det, "", (img.shape[1], img.shape[0])))
     return out

@@ -31,7 +31,8 @@ def check_lens_model(lens_model: str | None, imagersize: tuple[int, int]) -> Non
         raise UserError(str(exc)) from None
 
 
-def detect(images: str, board: tuple[int, int], square_m: float) -> tuple[BoardObservations, str]:
+def detect(images: str, board: tuple[int, int], square_m: float,
+           target: str = "checkerboard") -> tuple[BoardObservations, str]:
     """Detection over the images (a folder or a glob): (observations, corners.vnl text). Corrupt files
     are bad input; saturated or blank images are skipped and named (all of them unusable is bad input
     too). ``board``: inner corners (W, H); ``square_m``: the square size in metres."""
@@ -42,7 +43,7 @@ def detect(images: str, board: tuple[int, int], square_m: float) -> tuple[BoardO
         files = list_images(images)
     except ImageError as exc:
         raise UserError(f"--images {exc}") from None
-    results = detect_files(files, board, strict=False)
+    results = detect_files(files, board, strict=False, target=target)
     bad = [r for r in results if r.detection is None]
     # ImageError reads "<path>: <what is wrong>"; judge the second part only
     what = {id(r): r.error[len(str(r.path)):] if r.error.startswith(str(r.path)) else r.error for r in bad}
@@ -121,15 +122,17 @@ def solve(obs: BoardObservations, *, solver: str, lens_model: str | None, focal_
 
 def calibrate(images: str, board: tuple[int, int], square_m: float, *, solver: str, lens_model: str | None,
               focal_px: float, expected_size: tuple[int, int], camera_name: str, rig_hash: str,
-              show_solver_output: bool = False, nominal_corner_angle_deg: float = 0.0):
+              show_solver_output: bool = False, nominal_corner_angle_deg: float = 0.0,
+              target: str = "checkerboard"):
     """The whole pipeline: (the observations detected, the solution, its
     :class:`~calibration.thermal.outputs.Outputs`; the solution holds the observations it kept after
     rejecting images). ``expected_size``:
     the rig description's thermal imager (W, H) px, warned about when the images differ;
     ``show_solver_output``: let mrcal's C-level progress lines through to stderr;
-    ``nominal_corner_angle_deg``: the angle the rig's nominal lens sees the image corners at (lens_check.py)."""
+    ``nominal_corner_angle_deg``: the angle the rig's nominal lens sees the image corners at (lens_check.py);
+    ``target``: the --target kind (calibration/targets)."""
     check_lens_model(lens_model, expected_size)
-    obs, corners_text = detect(images, board, square_m)
+    obs, corners_text = detect(images, board, square_m, target)
     if obs.imagersize != tuple(expected_size):
         log.warning("images are %dx%d, the rig description's thermal camera is %dx%d (its nominal lens's "
                     "field is not used to check the model)", *obs.imagersize, *expected_size)
