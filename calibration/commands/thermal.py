@@ -20,6 +20,7 @@ from platform_tools.rig.conventions import (CheckFailed, UserError, add_output_o
 
 from calibration.report.verdict import MIN_TRUSTED_SHARE, TRUSTED, Verdict
 from calibration.commands.synth import parse_board
+from calibration.targets import TARGET_KINDS, TargetError
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -28,7 +29,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Calibrate a thermal camera's lens from images of a heated checkerboard. Writes into "
                     "--out: thermal.cameramodel (mrcal, with optimization_inputs), thermal_opencv.yaml, "
                     "thermal_camera_info.yaml (ROS), kalibr_camchain.yaml, corners.vnl and report.html "
-                    "(coverage, residuals, projection uncertainty, per-image errors, verdict).",
+                    "(coverage, residuals, projection uncertainty, per-image errors, verdict). With --bag, the frames are "
+                    "chosen from a recording (sharp, outside FFC, covering the image) and listed in frames.json.",
         epilog="Verdict (report.html, --json verdict.grade): trusted (the whole image), trusted-within-region "
                "(usable inside the valid-intrinsics region written into thermal.cameramodel: the central 80% "
                f"of the image trusted and at least {100 * MIN_TRUSTED_SHARE:.0f}% of the whole image), not-trusted. "
@@ -36,9 +38,19 @@ def register(sub: argparse._SubParsersAction) -> None:
                "--require-whole-image), or not solvable; 2 bad input. --exit-zero: 0 whenever it solved.")
     add_rig_options(p)
     add_output_options(p)
-    p.add_argument("--images", required=True, metavar="DIR|GLOB", help="folder or glob of 8/16-bit images")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--images", metavar="DIR|GLOB", help="folder or glob of 8/16-bit images")
+    src.add_argument("--bag", type=Path, metavar="REC",
+                     help="a recording (rosbag2 folder or MCAP): frames of --topic chosen by sharpness, FFC and "
+                          "coverage (written as frames.json in --out)")
+    p.add_argument("--topic", metavar="T", help="with --bag: the thermal image topic, e.g. /thermal_left/image")
+    p.add_argument("--max-frames", type=int, default=40, metavar="N", help="with --bag: frames to calibrate from")
     p.add_argument("--board", required=True, metavar="WxH", help="inner corners across x down, e.g. 10x7")
     p.add_argument("--square", required=True, type=float, metavar="METRES", help="square size in metres")
+    p.add_argument("--target", default="checkerboard", choices=TARGET_KINDS,
+                   help="checkerboard (default); marker-checkerboard: a checkerboard with a plain central marker "
+                        "over its 2x2 middle squares and one dot in the marker's top-left quarter, which labels "
+                        "partial views with no board edge in them (docs/calibration.md)")
     p.add_argument("--out", required=True, type=Path, metavar="DIR", help="output folder (replaced whole)")
     p.add_argument("--lens-model", default=None, metavar="M",
                    help="default: chosen by the data (OPENCV8 unless it has a pole or fold inside the image, then "
@@ -79,16 +91,44 @@ def nominal_corner_angle_deg(rig) -> float:
 
 
 def cmd_thermal(args: argparse.Namespace) -> int:
-    from calibration.thermal.pipeline import calibrate
     rig = rig_from_args(args)
     board = parse_board(args.board)
     square = _check_square(args.square)
+    try:
+        from calibration.detect.targets import check_target_board
+        check_target_board(args.target, board)
+    except TargetError as exc:
+        raise UserError(str(exc)) from None
     spec = rig.camera_model(rig.desc.sensors.thermal.camera_model)
-    obs, solution, out = calibrate(args.images, board, square, solver=args.solver, lens_model=args.lens_model,
-                                   focal_px=rig.focal_px(spec), expected_size=(spec.width_px, spec.height_px),
-                                   camera_name=args.camera_name, rig_hash=rig.hash,
-                                   show_solver_output=args.verbose,
-                                   nominal_corner_angle_deg=nominal_corner_angle_deg(rig))
+    if args.topic and args.bag is None:
+        raise UserError("--topic goes with --bag (a recording); --images reads image files")
+    if args.bag is not None:
+        if not args.topic:
+            raise UserError("--bag needs --topic (the thermal image topic, e.g. /thermal_left/image)")
+        if not 8 <= args.max_frames <= 1000:
+            raise UserError(f"--max-frames {args.max_frames}: expected 8 to 1000")
+        import json
+        import tempfile
+        from calibration.commands.thermal_frames import select_frames
+        with tempfile.TemporaryDirectory(prefix="calibrate-frames-") as tmp:
+            chosen = select_frames(args.bag, args.topic, board, args.target, rig, Path(tmp), args.max_frames)
+            obs, solution, out = _calibrate(args, rig, spec, tmp, board, square)
+        out.files["frames.json"] = json.dumps(chosen, indent=1)
+        out.summary["frames"] = {k: v for k, v in chosen.items() if k != "chosen_stamps_ns"}
+    else:
+        obs, solution, out = _calibrate(args, rig, spec, args.images, board, square)
+    return _write_and_report(args, obs, solution, out)
+
+
+def _calibrate(args, rig, spec, images, board, square):
+    from calibration.thermal.pipeline import calibrate
+    return calibrate(images, board, square, solver=args.solver, lens_model=args.lens_model,
+                     focal_px=rig.focal_px(spec), expected_size=(spec.width_px, spec.height_px),
+                     camera_name=args.camera_name, rig_hash=rig.hash, show_solver_output=args.verbose,
+                     nominal_corner_angle_deg=nominal_corner_angle_deg(rig), target=args.target)
+
+
+def _write_and_report(args, obs, solution, out) -> int:
     with atomic.OutputDir(args.out) as stage:
         for name, text in out.files.items():
             (stage / name).write_text(text)
