@@ -50,52 +50,85 @@ def _depth(task: dict, got: dict) -> np.ndarray:
     return compute(task["depth"], got["zed_left"], got["zed_right"], _stereo[key])
 
 
-def _write_png(path: Path, img: np.ndarray) -> None:
-    ok, buf = cv2.imencode(".png", img)
+#: every image kind an export can write (Params.outputs chooses among them)
+KINDS = ("zed_left", "zed_right", "raw16", "8bit", "rgb_registered", "mask", "depth_mm")
+#: the kinds written per thermal camera, in <recording>/<camera>/<kind>/ with index column <camera>_<kind>_png
+THERMAL_KINDS = ("raw16", "8bit", "rgb_registered", "mask", "depth_mm")
+#: a writer's temporary file: ``.<name>.<pid>.tmp`` beside the image it becomes (engines remove a stopped
+#: worker's by its pid; a resumed export removes any left by a killed one)
+TMP_SUFFIX = ".tmp"
+
+
+def png_params(level: int | None) -> list[int]:
+    """cv2.imencode flags: None keeps OpenCV's own default (zlib level 1 with the RLE strategy: the fastest of all
+    tried but level 0, docs/dataset.md); 0..9 the zlib level, with the default strategy."""
+    return [] if level is None else [cv2.IMWRITE_PNG_COMPRESSION, int(level)]
+
+
+def tmp_name(path: Path, pid: int) -> Path:
+    return path.with_name(f".{path.name}.{pid}{TMP_SUFFIX}")
+
+
+def _write_png(path: Path, img: np.ndarray, params: list[int]) -> None:
+    ok, buf = cv2.imencode(".png", img, params)
     if not ok:
         raise OSError(f"{path}: PNG encoding failed")
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_bytes(buf.tobytes())
-    os.replace(tmp, path)
+    tmp = tmp_name(path, os.getpid())
+    try:
+        tmp.write_bytes(buf)
+        os.replace(tmp, path)
+    except BaseException:           # an interrupt or a full disk: no half-written file left behind
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def _read(task: dict) -> dict[int, dict[str, np.ndarray]]:
+    """The decoded images of the chunk's samples: sample position -> stream -> image. Only the MCAP chunks around
+    each sample's messages are read, each once (decode.windows)."""
+    wanted, logs = {}, []
+    for pi, pair in enumerate(task["pairs"]):
+        for s, fr in pair["frames"].items():
+            wanted[(task["topics"][s], fr["stamp_ns"])] = (pi, s)
+            logs.append(fr["log_ns"])
+    files = sorted({task["files"][fr["file"]] for p in task["pairs"] for fr in p["frames"].values()})
+    images: dict[int, dict[str, np.ndarray]] = {}
+    for (pi, s), _, img in iter_frames(files, wanted, logs):
+        images.setdefault(pi, {})[s] = img
+    return images
 
 
 def process_chunk(task: dict) -> list[dict]:
     """Decode, convert, register and write one chunk of samples; return their index rows."""
     cv2.setNumThreads(1)
     out = Path(task["out"])
-    rec_dir = out / task["recording"]
-    p8 = thermal8.Params(**task["params"]["thermal_8bit"])
-    wanted, lo, hi = {}, None, None
-    for pi, pair in enumerate(task["pairs"]):
-        for s, fr in pair["frames"].items():
-            wanted[(task["topics"][s], fr["stamp_ns"])] = (pi, s)
-            lo = fr["log_ns"] if lo is None else min(lo, fr["log_ns"])
-            hi = fr["log_ns"] if hi is None else max(hi, fr["log_ns"])
-    files = sorted({task["files"][fr["file"]] for p in task["pairs"] for fr in p["frames"].values()})
-    images: dict[int, dict[str, np.ndarray]] = {}
-    for (pi, s), _, img in iter_frames(files, wanted, lo, hi):
-        images.setdefault(pi, {})[s] = img
+    rec = task["recording"]
+    rec_dir = out / rec
+    params = task["params"]
+    p8 = thermal8.Params(**params["thermal_8bit"])
+    kinds = set(params.get("outputs") or KINDS)
+    png = png_params(params.get("png_compression_level"))
+    images = _read(task)
     rows = []
     thermal_h = task["thermal_height"]
     for pi, pair in enumerate(task["pairs"]):
         got = images.get(pi, {})
         missing = [s for s in pair["frames"] if s not in got]
         if missing:
-            raise RecordingError(f"{task['recording']} sample {pair['sample']}: {', '.join(missing)} not found in "
-                              f"the MCAP (changed since it was indexed?)")
+            raise RecordingError(f"{rec} sample {pair['sample']}: {', '.join(missing)} not found in "
+                                 f"the MCAP (changed since it was indexed?)")
         name = f"{pair['sample']:06d}.png"
-        row = {"recording": task["recording"], "sample": pair["sample"]}
+        row = {"recording": rec, "sample": pair["sample"]}
         for s in IMAGE_STREAMS:
             if s in pair["frames"]:
                 row[f"t_{s}_ns"] = pair["frames"][s]["stamp_ns"]
         for s, r in pair["residual_ms"].items():
             row[f"residual_{s}_ms"] = round(r, 4)
         zed = got["zed_left"]
-        _write_png(rec_dir / "zed_left" / name, zed)
-        _write_png(rec_dir / "zed_right" / name, got["zed_right"])
-        row["zed_left_png"] = f"{task['recording']}/zed_left/{name}"
-        row["zed_right_png"] = f"{task['recording']}/zed_right/{name}"
+        for s in ("zed_left", "zed_right"):
+            if s in kinds:
+                _write_png(rec_dir / s / name, got[s], png)
+                row[f"{s}_png"] = f"{rec}/{s}/{name}"
         depth = _depth(task, got)
         row["depth_source"] = task["depth"]
         for cam in THERMAL:
@@ -103,21 +136,18 @@ def process_chunk(task: dict) -> list[dict]:
             if raw.shape[0] > thermal_h:          # Boson telemetry rows appended below the image
                 raw = raw[:thermal_h]
             img8, info = thermal8.to_8bit(raw, p8)
-            reg = _registrar(task, cam).register(depth, zed)
-            d = cam
-            _write_png(rec_dir / d / "raw16" / name, raw.astype(np.uint16))
-            _write_png(rec_dir / d / "8bit" / name, img8)
-            _write_png(rec_dir / d / "rgb_registered" / name, reg.image_u8())
-            _write_png(rec_dir / d / "mask" / name, reg.mask.astype(np.uint8) * 255)
-            _write_png(rec_dir / d / "depth_mm" / name,
-                       np.clip(np.nan_to_num(reg.depth_m * 1000.0, nan=0.0), 0, 65535).astype(np.uint16))
+            reg = _registrar(task, cam).register_u8(depth, zed)
+            made = {"raw16": lambda: raw.astype(np.uint16, copy=False), "8bit": lambda: img8,
+                    "rgb_registered": lambda: reg.image, "mask": lambda: reg.mask, "depth_mm": lambda: reg.depth_mm}
             row |= {f"{cam}_ffc": pair["ffc"][cam], f"{cam}_ffc_status": pair["ffc_status"][cam],
                     f"{cam}_since_ffc_s": pair["since_ffc_s"][cam],
                     f"{cam}_lo_counts": info["lo_counts"], f"{cam}_hi_counts": info["hi_counts"],
                     f"{cam}_percentile_clip": info["percentile_clip"],
-                    f"{cam}_registered_fraction": round(float(reg.mask.mean()), 4)}
-            for kind in ("raw16", "8bit", "rgb_registered", "mask", "depth_mm"):
-                row[f"{cam}_{kind}_png"] = f"{task['recording']}/{d}/{kind}/{name}"
+                    f"{cam}_registered_fraction": round(reg.fraction, 4)}
+            for kind in THERMAL_KINDS:
+                if kind in kinds:
+                    _write_png(rec_dir / cam / kind / name, made[kind](), png)
+                    row[f"{cam}_{kind}_png"] = f"{rec}/{cam}/{kind}/{name}"
         row["calibration"] = task["calibration_source"]
         row["calibration_sha256"] = task["calibration_sha256"]
         row["rig_hash"] = task["rig_hash"]

@@ -2,6 +2,9 @@
 numpy arrays: (H, W) mono / depth, (H, W, 3) BGR uint8."""
 from __future__ import annotations
 
+import bisect
+import itertools
+
 import cv2
 import numpy as np
 
@@ -31,8 +34,39 @@ def decode_image(schema_name: str, msg) -> np.ndarray:
     return img[..., 0] if ch == 1 else np.ascontiguousarray(img[..., :3])
 
 
-def iter_frames(files: list[str], wanted: dict[tuple[str, int], str], lo_ns: int, hi_ns: int):
-    """Decode the wanted (topic, header stamp) messages logged within [lo, hi] of the given files."""
+def windows(log_ns, spans) -> list[tuple[int, int]]:
+    """The log-time windows to read so that every MCAP chunk holding a wanted message is decompressed once and no
+    other chunk of a sequentially written file is: ``spans`` are the chunks' (message_start_time, message_end_time)
+    (the file's chunk index), ``log_ns`` the wanted messages' log times. Each window is one needed chunk's span, or
+    several needed chunks' spans merged where they overlap. A time in no chunk's span (no index) gets its own
+    one-instant window."""
+    spans = sorted((int(a), int(b)) for a, b in spans)
+    starts = [a for a, _ in spans]
+    reach = list(itertools.accumulate((b for _, b in spans), max))     # the latest end among spans[:i + 1]
+    need: set[int] = set()
+    loose: list[tuple[int, int]] = []
+    for t in {int(x) for x in log_ns}:
+        hit = False
+        i = bisect.bisect_right(starts, t) - 1       # the chunks starting at or before t, latest first
+        while i >= 0 and reach[i] >= t:              # stop where no earlier chunk reaches t
+            if spans[i][1] >= t:
+                need.add(i)
+                hit = True
+            i -= 1
+        if not hit:
+            loose.append((t, t))
+    out: list[list[int]] = []
+    for a, b in sorted([spans[i] for i in need] + loose):
+        if out and a <= out[-1][1] + 1:          # overlapping or back to back: one window
+            out[-1][1] = max(out[-1][1], b)
+        else:
+            out.append([a, b])
+    return [(a, b) for a, b in out]
+
+
+def iter_frames(files: list[str], wanted: dict[tuple[str, int], object], log_ns):
+    """Decode the wanted (topic, header stamp) messages, logged at the given log times, of the given files; only the
+    MCAP chunks holding one of those log times are decompressed, each once (:func:`windows`)."""
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
     topics = sorted({t for t, _ in wanted})
@@ -40,18 +74,23 @@ def iter_frames(files: list[str], wanted: dict[tuple[str, int], str], lo_ns: int
     for f in files:
         with open(f, "rb") as fh:
             reader = make_reader(fh)
-            try:        # mcap >= 1.3 names the window bounds; older releases take start_time / end_time
-                messages = reader.iter_messages(topics=topics, starting_at=lo_ns, ending_at=hi_ns)
-            except TypeError:
-                messages = reader.iter_messages(topics=topics, start_time=lo_ns, end_time=hi_ns + 1)
-            for schema, channel, msg in messages:
-                key = (channel.topic, header_stamp(msg.data))
-                if key not in wanted:
-                    continue
-                dec = decoders.get((f, schema.id))
-                if dec is None:
-                    dec = decoders[(f, schema.id)] = factory.decoder_for("cdr", schema)
-                yield wanted[key], key[1], decode_image(schema.name, dec(msg.data))
+            summary = reader.get_summary()
+            spans = [(c.message_start_time, c.message_end_time) for c in (summary.chunk_indexes if summary else [])]
+            for lo_ns, hi_ns in windows(log_ns, spans):
+                try:    # mcap >= 1.3 names the window bounds; older releases take start_time / end_time
+                    messages = reader.iter_messages(topics=topics, starting_at=lo_ns, ending_at=hi_ns,
+                                                    log_time_order=False)
+                except TypeError:
+                    messages = reader.iter_messages(topics=topics, start_time=lo_ns, end_time=hi_ns + 1,
+                                                    log_time_order=False)
+                for schema, channel, msg in messages:
+                    key = (channel.topic, header_stamp(msg.data))
+                    if key not in wanted:
+                        continue
+                    dec = decoders.get((f, schema.id))
+                    if dec is None:
+                        dec = decoders[(f, schema.id)] = factory.decoder_for("cdr", schema)
+                    yield wanted[key], key[1], decode_image(schema.name, dec(msg.data))
 
 
 def probe_sizes(rec: Recording) -> dict[str, tuple[int, int]]:
@@ -63,8 +102,7 @@ def probe_sizes(rec: Recording) -> dict[str, tuple[int, int]]:
         st = rec.streams[s]
         i = int(np.argmin(st.log_ns))
         wanted = {(st.topic, int(st.stamp_ns[i])): s}
-        for _, _, img in iter_frames([str(rec.files[st.file_index[i]])], wanted, int(st.log_ns[i]),
-                                      int(st.log_ns[i])):
+        for _, _, img in iter_frames([str(rec.files[st.file_index[i]])], wanted, [int(st.log_ns[i])]):
             out[s] = (img.shape[1], img.shape[0])
             break
     return out

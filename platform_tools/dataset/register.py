@@ -191,8 +191,7 @@ class Registrar:
         _points(depth, self.rays, self.R, self.t, self.kind, self.k, qext, self.out_w, self.out_h, us, vs, zs)
         return us, vs, zs
 
-    def register(self, depth: np.ndarray, src: np.ndarray) -> Result:
-        """Splat `src` ((H, W) or (H, W, C), any dtype) into the thermal view."""
+    def _accumulate(self, depth: np.ndarray, src: np.ndarray):
         us, vs, zs = self.points(depth)
         flat = src.reshape(us.shape[0], -1)
         C = flat.shape[1]
@@ -201,7 +200,61 @@ class Registrar:
         zacc = np.zeros((self.out_h, self.out_w), np.float64)
         zbuf = np.full((self.out_h, self.out_w), np.inf)
         _splat(us, vs, zs, flat, self.out_h, self.out_w, self.tol, acc, wsum, zacc, zbuf)
-        return _finish(acc, wsum, zacc, self.min_weight)
+        return acc, wsum, zacc
+
+    def register(self, depth: np.ndarray, src: np.ndarray) -> Result:
+        """Splat `src` ((H, W) or (H, W, C), any dtype) into the thermal view."""
+        return _finish(*self._accumulate(depth, src), self.min_weight)
+
+    def register_u8(self, depth: np.ndarray, src: np.ndarray) -> "Images":
+        """The export's images of :meth:`register` in one pass (numba): the same pixels as
+        ``Result.image_u8()``, ``mask * 255`` and the depth in mm that the export writes."""
+        acc, wsum, zacc = self._accumulate(depth, src)
+        h, w, C = acc.shape
+        image = np.empty((h, w, C), np.uint8)
+        mask = np.empty((h, w), np.uint8)
+        depth_mm = np.empty((h, w), np.uint16)
+        n = _finish_u8(acc, wsum, zacc, self.min_weight, image, mask, depth_mm)
+        return Images(image if C > 1 else image[..., 0], mask, depth_mm, n / (h * w))
+
+
+@dataclass
+class Images:
+    """What the export writes of one registration."""
+    image: np.ndarray       # (h, w, C) uint8: the weighted mean rounded half to even, 0 where invalid
+    mask: np.ndarray        # (h, w) uint8: 255 valid, 0 not
+    depth_mm: np.ndarray    # (h, w) uint16: registered depth in mm, truncated, 0 where invalid
+    fraction: float         # valid pixels / all pixels
+
+
+@numba.njit(cache=True)
+def _finish_u8(acc, wsum, zacc, min_weight, image, mask, depth_mm):
+    """:func:`_finish` then the export's conversions, per pixel with the same float32 steps; returns the count of
+    valid pixels."""
+    h, w, C = acc.shape
+    n = 0
+    for r in range(h):
+        for c in range(w):
+            ws = wsum[r, c]
+            if ws >= min_weight:
+                n += 1
+                mask[r, c] = 255
+                for ch in range(C):
+                    v = np.rint(np.float32(acc[r, c, ch] / ws))
+                    image[r, c, ch] = 0 if v < 0 else (255 if v > 255 else np.uint8(v))
+                d = np.float32(zacc[r, c] / ws) * np.float32(1000.0)
+                if not (d > 0):      # NaN or not positive
+                    depth_mm[r, c] = 0
+                elif d > 65535:
+                    depth_mm[r, c] = 65535
+                else:
+                    depth_mm[r, c] = np.uint16(d)
+            else:
+                mask[r, c] = 0
+                depth_mm[r, c] = 0
+                for ch in range(C):
+                    image[r, c, ch] = 0
+    return n
 
 
 def _finish(acc, wsum, zacc, min_weight) -> Result:

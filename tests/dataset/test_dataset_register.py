@@ -153,3 +153,23 @@ def test_thermal_lens_models_project_as_mrcal(scene, lensmodel, extra):
     q = mrcal.project(p, *cam.intrinsics())
     assert ok.sum() > 1000
     np.testing.assert_allclose(np.stack([us[ok], vs[ok]], 1), q, atol=1e-6)
+
+
+def test_register_u8_writes_the_pixels_of_the_float_path(scene):
+    """The export's one-pass conversion (register_u8) against Result's numpy conversions, on the scene with its
+    sky (no depth) and a patch pushed beyond 65.535 m (the uint16 mm clip)."""
+    reg = scene["reg"]
+    depth = scene["depth"].copy()
+    h, w = depth.shape
+    depth[h // 3:h // 3 + 40, w // 3:w // 3 + 40] = 80.0
+    bgr = geometry.colour(scene["zr"], scene["boxes"], geometry.SCENE)
+    a = reg.register(depth, bgr)
+    b = reg.register_u8(depth, bgr)
+    assert np.array_equal(b.image, a.image_u8())
+    assert np.array_equal(b.mask, a.mask.astype(np.uint8) * 255)
+    want_mm = np.clip(np.nan_to_num(a.depth_m * 1000.0, nan=0.0), 0, 65535).astype(np.uint16)
+    assert np.array_equal(b.depth_mm, want_mm)
+    assert (want_mm == 65535).sum() > 0 and (want_mm == 0).sum() > 0      # both clips exercised
+    assert b.fraction == float(a.mask.mean())
+    mono = reg.register_u8(depth, bgr[..., 1])                              # one channel: (h, w)
+    assert mono.image.shape == a.mask.shape and np.array_equal(mono.image, a.image_u8()[..., 1])
