@@ -2,9 +2,10 @@
 from __future__ import annotations
 
 import argparse
+import signal
 from pathlib import Path
 
-from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, print_json,
+from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, error, print_json,
     rig_from_args)
 
 
@@ -16,8 +17,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "percentile clip, CLAHE, bilateral; processing.thermal_8bit) keeping the 16-bit "
                                    "original, register the ZED left RGB into each thermal view from the ZED "
                                    "depth (--depth; z-buffer, bilinear splatting, validity mask), and write PNGs with "
-                                   "index.csv / index.parquet. Run the same command again to resume an interrupted "
-                                   "export; a folder holding a different export is refused.")
+                                   "index.csv / index.parquet and a dataset card (README.md). Run the same command "
+                                   "again to resume an interrupted export (Ctrl-C or SIGTERM stops every worker and "
+                                   "keeps the finished chunks; workers end if this process is killed); a folder "
+                                   "holding a different export is refused.",
+                       epilog="Exit codes: 0 done, 2 bad input (one line naming the file, topic or option; nothing "
+                              "written), 130 interrupted (resumable).")
     p.add_argument("recordings", metavar="RECORDING", nargs="+", type=Path,
                    help="rosbag2 folders, folders holding one (simulate-rig's DIR), or .mcap files")
     p.add_argument("--out", metavar="DIR", required=True, type=Path, help="the dataset folder (created; resumed)")
@@ -47,6 +52,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="frames dropped on each side of an FFC (default processing.ffc_margin_frames)")
     p.add_argument("--keep-ffc", action="store_true", help="keep FFC frames (flagged in the index)")
     p.add_argument("--chunk-size", type=int, default=8, metavar="N", help="samples per unit of work (default 8)")
+    p.add_argument("--paper", action="store_true",
+                   help="the dataset as the paper releases it: 1 Hz pairs, per thermal camera its 8-bit image, the "
+                        "RGB registered into it and the validity mask (no raw16, depth or ZED images)")
+    p.add_argument("--png-level", type=int, default=None, metavar="0-9",
+                   help="zlib level of the PNGs (default processing.png_compression_level; null there: OpenCV's "
+                        "fast default, level 1 RLE); 0 is about 12 %% faster and 2.7x larger, 6 about 7x slower "
+                        "and 22 %% smaller (docs/dataset.md)")
     p.add_argument("--recover", action="store_true",
                    help="salvage a truncated MCAP into NAME.recovered.mcap beside it (the original is kept)")
     add_rig_options(p)
@@ -54,8 +66,38 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=cmd_export)
 
 
+#: the shell's code for a command ended by SIGINT
+EXIT_INTERRUPTED = 130
+
+
+#: (option, attribute, default) of the options that go into the dataset card's command line when not default
+_OPTIONS = (("--rate", "rate", None), ("--workers", "workers", 1), ("--engine", "engine", "pool"),
+            ("--scheduler", "scheduler", None), ("--calibration", "calibration", None), ("--topics", "topics", None),
+            ("--depth", "depth", "auto"), ("--tolerance-ms", "tolerance_ms", None), ("--ffc-margin", "ffc_margin", None),
+            ("--keep-ffc", "keep_ffc", False), ("--chunk-size", "chunk_size", 8), ("--paper", "paper", False),
+            ("--png-level", "png_level", None), ("--recover", "recover", False), ("--rig", "rig", None))
+
+
+def command_line(args: argparse.Namespace) -> list[str]:
+    """The command as it was given (its non-default options, in a fixed order), however it was invoked."""
+    cmd = ["platform_tools", "export", *map(str, args.recordings), "--out", str(args.out)]
+    for opt, attr, default in _OPTIONS:
+        v = getattr(args, attr, default)
+        if v == default:
+            continue
+        cmd += [opt] if v is True else [opt, f"{v:g}" if isinstance(v, float) else str(v)]
+    for o in args.overrides:
+        cmd += ["--set", o]
+    return cmd
+
+
+def _terminated(signum, frame):
+    """SIGTERM (docker stop, a scheduler's kill) stops the export as Ctrl-C does: workers stopped, resumable."""
+    raise KeyboardInterrupt
+
+
 def cmd_export(args: argparse.Namespace) -> int:
-    from ..dataset.export import ExportError, Params, export
+    from ..dataset.export import PAPER_OUTPUTS, PAPER_RATE_HZ, ExportError, Params, export
     from ..dataset.layout import LayoutError, load_topic_map
     from ..dataset.stereo import BUILT_IN, StereoError, load_plugin
     if args.rate is not None and not 0 < args.rate <= 1000:
@@ -73,6 +115,11 @@ def cmd_export(args: argparse.Namespace) -> int:
             load_plugin(args.depth)
         except StereoError as exc:
             raise UserError(str(exc)) from None
+    if args.png_level is not None and not 0 <= args.png_level <= 9:
+        raise UserError(f"--png-level {args.png_level}: expected 0 to 9")
+    if args.paper and args.rate is not None and args.rate != PAPER_RATE_HZ:
+        raise UserError(f"--paper --rate {args.rate:g}: the paper's pairs are at {PAPER_RATE_HZ:g} Hz; leave out "
+                        f"--rate, or --paper")
     if args.scheduler and args.engine != "dask":
         raise UserError("--scheduler needs --engine dask")
     try:
@@ -80,17 +127,23 @@ def cmd_export(args: argparse.Namespace) -> int:
     except LayoutError as exc:
         raise UserError(str(exc)) from None
     rig = rig_from_args(args)
-    params = Params.from_rig(rig, rate_hz=args.rate, tolerance_ms=args.tolerance_ms, ffc_margin=args.ffc_margin,
-                             keep_ffc=args.keep_ffc, chunk_size=args.chunk_size, depth=args.depth)
+    extra = {"rate_hz": PAPER_RATE_HZ, "outputs": PAPER_OUTPUTS} if args.paper else {"rate_hz": args.rate}
+    params = Params.from_rig(rig, tolerance_ms=args.tolerance_ms, ffc_margin=args.ffc_margin,
+                             keep_ffc=args.keep_ffc, chunk_size=args.chunk_size, depth=args.depth,
+                             png_compression_level=("rig" if args.png_level is None else args.png_level), **extra)
+    previous = signal.signal(signal.SIGTERM, _terminated)
     try:
         summary = export(args.recordings, args.out, rig, params, calibration=args.calibration, engine=args.engine,
                          workers=args.workers, scheduler=args.scheduler, recover=args.recover,
-                         topic_map=topic_map)
+                         topic_map=topic_map, command=command_line(args))
     except ExportError as exc:
         raise UserError(str(exc)) from None
     except KeyboardInterrupt:
-        raise UserError(f"interrupted; the chunks already done are kept: run the same command again to resume "
-                        f"into {args.out}") from None
+        error(f"{args.out}: interrupted; every worker stopped, the chunks already done are kept: run the same "
+              f"command again to resume")
+        return EXIT_INTERRUPTED
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     if args.json:
         print_json(summary)
     elif not args.quiet:

@@ -26,25 +26,35 @@ def run_inline(work, tasks, finished, workers, scheduler) -> None:
 
 
 def run_pool(work, tasks, finished, workers, scheduler) -> None:
+    """A process pool of spawned workers that end with this process (workers.die_with_parent). On any error or
+    interrupt (SIGINT) here, the queued tasks are cancelled and every worker is stopped at once (a task in flight is
+    abandoned, its chunk redone on resume) before the exception goes on."""
     if workers <= 1:
         return run_inline(work, tasks, finished, workers, scheduler)
     import multiprocessing
+    import os
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+    from .workers import die_with_parent, stop
     bar = iter(_bar(len(tasks)))
     ctx = multiprocessing.get_context("spawn")     # no fork of a process holding numba / threads
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+    before = set(multiprocessing.active_children())
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=die_with_parent,
+                               initargs=(os.getpid(),))
+    try:
         pending = {pool.submit(work, t): t for t in tasks}
-        try:
-            while pending:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for f in done:
-                    t = pending.pop(f)
-                    finished(t, f.result())
-                    next(bar, None)
-        except BaseException:
-            for f in pending:
-                f.cancel()
-            raise
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for f in done:
+                t = pending.pop(f)
+                finished(t, f.result())
+                next(bar, None)
+    except BaseException:
+        mine = [p for p in multiprocessing.active_children() if p not in before]
+        pool.shutdown(wait=False, cancel_futures=True)
+        stop(mine)
+        raise
+    pool.shutdown(wait=True)
 
 
 def run_dask(work, tasks, finished, workers, scheduler) -> None:

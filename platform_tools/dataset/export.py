@@ -4,6 +4,7 @@ Layout of ``OUT``::
 
     export.json                      what this export is (inputs, parameters, calibration) and its status
     index.csv, index.parquet         one row per sample (written when every chunk is done)
+    README.md                        the dataset card (:mod:`.card`), written with the index
     <recording>/zed_left/NNNNNN.png          RGB as recorded (8-bit BGR PNG)
     <recording>/zed_right/NNNNNN.png
     <recording>/thermal_left/raw16/NNNNNN.png        the 16-bit original
@@ -15,7 +16,9 @@ Layout of ``OUT``::
     .chunks/<recording>-CCCCC.json   one per finished chunk of samples: its index rows
 
 Work is cut into chunks of consecutive samples of one recording. A chunk's images are written
-first, then its marker; an interrupted export resumes by redoing only the chunks without a marker.
+first, then its marker; an interrupted export resumes by redoing only the chunks without a marker (a killed
+worker's temporary files are removed first). ``Params.outputs`` chooses the images (``PAPER_OUTPUTS``: the
+paper's release).
 ``export.json`` holds a fingerprint of everything the output depends on: the same command resumes,
 a different one (other recordings, rate, calibration, parameters) is refused rather than mixed in.
 
@@ -25,19 +28,23 @@ plans the chunks, keeps the manifest and the resume markers, and writes the inde
 """
 from __future__ import annotations
 
+import contextlib
 import csv
 import hashlib
 import io
 import json
 import logging
+import re
+import signal
+import threading
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
 
 from platform_tools.rig import atomic
-from . import thermal8
+from . import card, thermal8
 from .calib import CalibrationError, at_recorded_size, for_recording, load_calibration, model_to_dict, zed_right
-from .chunk import process_chunk
+from .chunk import KINDS, TMP_SUFFIX, process_chunk
 from .decode import IMAGE_STREAMS, probe_sizes
 from .engines import ENGINES, EngineError
 from .pairing import plan
@@ -66,16 +73,29 @@ class Params:
     thermal_8bit: dict
     #: "auto" (recorded when the recording has depth, else stereo), "recorded", "stereo" or a "module:function"
     depth: str = "auto"
+    #: the images written per sample (chunk.KINDS; PAPER_OUTPUTS for --paper)
+    outputs: tuple = KINDS
+    #: zlib level of the PNGs, 0..9; None: OpenCV's fast default (processing.png_compression_level)
+    png_compression_level: int | None = None
 
     @classmethod
     def from_rig(cls, rig, *, rate_hz=None, tolerance_ms=None, ffc_margin=None, keep_ffc=False,
-                 min_coverage=0.5, chunk_size=8, depth="auto") -> "Params":
+                 min_coverage=0.5, chunk_size=8, depth="auto", outputs=KINDS, png_compression_level="rig") -> "Params":
         p = rig.desc.processing
+        level = p.png_compression_level if png_compression_level == "rig" else png_compression_level
         return cls(float(rate_hz if rate_hz is not None else p.pair_rate_hz),
                    float(tolerance_ms if tolerance_ms is not None else p.pair_tolerance_ms),
                    int(ffc_margin if ffc_margin is not None else p.ffc_margin_frames), bool(keep_ffc),
                    float(p.zbuffer_tolerance_percent), float(min_coverage), int(chunk_size),
-                   asdict(thermal8.Params.from_rig(rig)), str(depth))
+                   asdict(thermal8.Params.from_rig(rig)), str(depth), tuple(outputs),
+                   None if level is None else int(level))
+
+
+#: what the paper releases per sample (docs/dataset.md "The paper's dataset"): per thermal camera its 8-bit image,
+#: the RGB registered into it and the mask of where that RGB is valid (no content where there was no depth)
+PAPER_OUTPUTS = ("8bit", "rgb_registered", "mask")
+#: the paper counts its pairs at 1 Hz (shared/reference/platform.md)
+PAPER_RATE_HZ = 1.0
 
 
 # ----------------------------------------------------------------------------- the export
@@ -89,7 +109,7 @@ def _differences(old: dict, new: dict) -> list[str]:
     if [r.get("fingerprint") for r in old.get("recordings", [])] != [r["fingerprint"] for r in new["recordings"]]:
         diffs.append("recordings " + ", ".join(r.get("path", "?") for r in old.get("recordings", [])))
     for k, v in new["params"].items():
-        if old.get("params", {}).get(k) != v:
+        if json.dumps(old.get("params", {}).get(k), default=str) != json.dumps(v, default=str):
             diffs.append(f"{k} {old.get('params', {}).get(k)}")
     if old.get("calibration", {}).get("sha256") != new["calibration"]["sha256"]:
         diffs.append(f"calibration {old.get('calibration', {}).get('source')}")
@@ -105,6 +125,55 @@ def _chunk_complete(out: Path, marker: Path) -> bool:
     except (OSError, json.JSONDecodeError):
         return False
     return all((out / v).is_file() for r in rows for k, v in r.items() if k.endswith("_png"))
+
+
+#: a chunk writer's temporary image (chunk.tmp_name): ``.NNNNNN.png.PID.tmp``
+_PARTIAL = re.compile(r"^\.\d{6}\.png\.\d+" + re.escape(TMP_SUFFIX) + "$")
+#: the files export writes itself with platform_tools.rig.atomic, whose temporary files are ``.NAME.XXXXXXXX.tmp``
+_OWN = (MANIFEST, "index.csv", "index.parquet", card.CARD)
+
+
+def _atomic_tmp(name_re: str) -> re.Pattern:
+    return re.compile(r"^\." + name_re + r"\.[A-Za-z0-9_]+\.tmp$")
+
+
+def remove_partial(out: Path, recordings) -> list[Path]:
+    """Remove what a stopped or killed export left half-written in its own folder: a worker's temporary images
+    (the names chunk.tmp_name makes) in the recording folders, and the temporary files of export's own atomic
+    writes (a chunk marker, the manifest, the index, the card). Returns them."""
+    gone = []
+    checks = [(out / name, _PARTIAL, True) for name in recordings]
+    checks += [(out / CHUNKS, _atomic_tmp(r"[^/]+\.json"), False)]
+    checks += [(out, _atomic_tmp("|".join(re.escape(n) for n in _OWN)), False)]
+    for folder, pattern, deep in checks:
+        if not folder.is_dir():
+            continue
+        for f in (folder.rglob if deep else folder.glob)("*.tmp"):
+            if pattern.match(f.name) and f.is_file():
+                f.unlink(missing_ok=True)
+                gone.append(f)
+    return gone
+
+
+@contextlib.contextmanager
+def _interrupts_deferred():
+    """SIGINT / SIGTERM held back until the block ends, then raised again with the handlers restored: what the block
+    writes (a chunk marker, the manifest, the index) is written whole. Python runs signal handlers in the main
+    thread only, so this holds them there whichever thread the kernel delivered the signal to."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got: list[int] = []
+    old = {}
+    try:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            old[sig] = signal.signal(sig, lambda signum, frame: got.append(signum))
+        yield
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+        if got:
+            signal.raise_signal(got[0])
 
 
 def check_out(out: Path, manifest: dict) -> dict | None:
@@ -131,9 +200,10 @@ def check_out(out: Path, manifest: dict) -> dict | None:
 
 def export(recordings: list[Path], out: Path, rig, params: Params, *, calibration: Path | None = None,
            engine: str = "pool", workers: int = 1, scheduler: str | None = None, recover: bool = False,
-           on_chunk: Callable[[str], None] | None = None, topic_map=None) -> dict:
+           on_chunk: Callable[[str], None] | None = None, topic_map=None, command: list[str] | None = None) -> dict:
     """``calibration``: a folder of models overriding the recordings' camera_info and the nominal models;
-    ``topic_map``: a :class:`.layout.Layout` (``--topics``) instead of the detected layout."""
+    ``topic_map``: a :class:`.layout.Layout` (``--topics``) instead of the detected layout; ``command``: the
+    command line, for the dataset card."""
     out = Path(out)
     if params.depth not in BUILT_IN:
         try:
@@ -200,6 +270,7 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
         "params": asdict(params), "calibration": calibration_used, "rig_hash": rig.hash}
     manifest["fingerprint"] = _fingerprint(manifest)
     old = check_out(out, manifest)
+    remove_partial(out, names)            # what a stopped or killed run left half-written
     out.mkdir(parents=True, exist_ok=True)
     (out / CHUNKS).mkdir(exist_ok=True)
     tasks = [t for ch in tasks_by_rec for t in ch]
@@ -209,13 +280,15 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
               else {"per_recording": {r.name: c.to_dict() for r, c in zip(recs, cals)}})
     manifest |= {"status": "running", "calibration_models": models,
                  "chunks": len(tasks), "samples": sum(len(t["pairs"]) for t in tasks)}
-    atomic.write_text(out / MANIFEST, json.dumps(manifest, indent=2) + "\n")
+    with _interrupts_deferred():
+        atomic.write_text(out / MANIFEST, json.dumps(manifest, indent=2) + "\n")
     resumed = old is not None and len(done) > 0
     if resumed:
         log.warning("%s: resuming: %d of %d chunks already done", out, len(tasks) - len(todo), len(tasks))
 
     def finished(task: dict, rows: list[dict]) -> None:
-        atomic.write_text(out / CHUNKS / f"{task['id']}.json", json.dumps(rows) + "\n")
+        with _interrupts_deferred():
+            atomic.write_text(out / CHUNKS / f"{task['id']}.json", json.dumps(rows) + "\n")
         if on_chunk:
             on_chunk(task["id"])
 
@@ -227,12 +300,17 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
             run(process_chunk, todo, finished, workers, scheduler)
         except (EngineError, RecordingError, StereoError) as exc:
             raise ExportError(str(exc)) from None
+        finally:                          # interrupted: the workers are stopped; their unfinished files go
+            remove_partial(out, names)
     rows = []
     for t in tasks:
         rows += json.loads((out / CHUNKS / f"{t['id']}.json").read_text())
-    write_index(out, rows)
-    manifest |= {"status": "complete", "rows": len(rows)}
-    atomic.write_text(out / MANIFEST, json.dumps(manifest, indent=2) + "\n")
+    text = card.render(manifest, rows, command)
+    with _interrupts_deferred():
+        write_index(out, rows)
+        atomic.write_text(out / card.CARD, text)
+        manifest |= {"status": "complete", "rows": len(rows)}
+        atomic.write_text(out / MANIFEST, json.dumps(manifest, indent=2) + "\n")
     return {"out": str(out), "samples": len(rows), "chunks": len(tasks), "chunks_run": len(todo),
             "resumed": resumed, "engine": engine, "recordings": idents,
             "calibration": calibration_used}

@@ -1,0 +1,146 @@
+"""Clean stops of a real `platform_tools export` process with a pool of 2 workers: Ctrl-C (SIGINT to the process
+group, as a terminal sends it), SIGTERM, and a SIGKILL of the parent. Workers are found by pid (the parent's
+children in /proc) and checked gone, not timed; the interrupted export is then resumed with the same command and
+must equal, file for file and byte for byte, an uninterrupted export made with that command."""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import REPO
+
+pytestmark = [pytest.mark.slow, pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")]
+
+#: a bound on waiting for the export to reach a state; reaching it later fails the test, sooner proves nothing
+WAIT_S = 300
+
+
+def _cmd(sim_dir: Path, out: Path) -> list[str]:
+    # every pair (30 Hz), one sample per chunk: many chunks, so a stop lands in the middle
+    return [sys.executable, "-m", "platform_tools.cli.main", "export", str(sim_dir), "--out", str(out),
+            "--rate", "30", "--workers", "2", "--chunk-size", "1", "-q"]
+
+
+def _children(pid: int) -> dict[int, str]:
+    """pid -> command line of the live processes whose parent is ``pid``."""
+    out = {}
+    for d in Path("/proc").iterdir():
+        if not d.name.isdigit():
+            continue
+        try:
+            stat = (d / "stat").read_text()
+            cmdline = (d / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+        except OSError:
+            continue
+        fields = stat.rsplit(")", 1)[1].split()
+        if int(fields[1]) == pid and fields[0] != "Z":
+            out[int(d.name)] = cmdline
+    return out
+
+
+def _running(pid: int) -> bool:
+    """Alive and not a zombie (an orphan reparented to a PID 1 that does not reap stays a zombie: not running)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def _wait(cond, what: str) -> None:
+    deadline = time.monotonic() + WAIT_S
+    while not cond():
+        if time.monotonic() > deadline:
+            pytest.fail(f"gave up waiting for {what}")
+        time.sleep(0.05)
+
+
+def _tree(out: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(out)): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()}
+
+
+def _markers(out: Path) -> int:
+    return len(list((out / ".chunks").glob("*.json"))) if (out / ".chunks").is_dir() else 0
+
+
+@pytest.fixture(scope="module")
+def reference(sim, tmp_path_factory):
+    """An uninterrupted export, made where the interrupted ones go (the card holds the command line), kept aside."""
+    base = tmp_path_factory.mktemp("stops")
+    out = base / "ds"
+    r = subprocess.run(_cmd(sim[0], out), cwd=REPO, capture_output=True, text=True, timeout=1200)
+    assert r.returncode == 0, r.stderr
+    shutil.move(out, base / "reference")
+    return base, _tree(base / "reference")
+
+
+def _start(sim_dir: Path, out: Path) -> subprocess.Popen:
+    shutil.rmtree(out, ignore_errors=True)
+    p = subprocess.Popen(_cmd(sim_dir, out), cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         start_new_session=True)        # its own process group, as a shell job
+    _wait(lambda: _markers(out) >= 3 or p.poll() is not None, "three finished chunks")
+    assert p.poll() is None, p.stderr.read()
+    return p
+
+
+def _workers(p: subprocess.Popen) -> tuple[list[int], list[int]]:
+    """(the pool's worker pids, every child's pid: the workers and multiprocessing's resource tracker)."""
+    kids = _children(p.pid)
+    workers = [k for k, cmd in kids.items() if "spawn_main" in cmd]
+    assert len(workers) == 2, kids
+    return workers, list(kids)
+
+
+def _resume_equals_reference(sim_dir: Path, out: Path, reference: dict) -> None:
+    manifest = json.loads((out / "export.json").read_text())
+    assert manifest["status"] == "running" and _markers(out) < manifest["chunks"]   # stopped midway
+    assert not (out / "index.csv").exists() and not (out / "README.md").exists()
+    r = subprocess.run(_cmd(sim_dir, out)[:-1] + ["--json"], cwd=REPO, capture_output=True, text=True, timeout=1200)
+    assert r.returncode == 0, r.stderr
+    s = json.loads(r.stdout)
+    assert s["resumed"] and 0 < s["chunks_run"] < s["chunks"]
+    got = _tree(out)
+    assert sorted(got) == sorted(reference)
+    assert [k for k in got if got[k] != reference[k]] == []
+
+
+@pytest.mark.parametrize("how", ["ctrl-c", "sigterm"])
+def test_an_interrupt_stops_every_worker_and_the_export_resumes_identical(sim, reference, how):
+    base, ref = reference
+    out = base / "ds"
+    p = _start(sim[0], out)
+    workers, kids = _workers(p)
+    if how == "ctrl-c":
+        os.killpg(p.pid, signal.SIGINT)           # the whole foreground group, workers included
+    else:
+        os.kill(p.pid, signal.SIGTERM)
+    _, err = p.communicate(timeout=WAIT_S)
+    assert p.returncode == 130
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "interrupted" in lines[0] and str(out) in lines[0], err   # no worker traceback
+    # the parent stopped and reaped its workers before it exited; at most the resource tracker is still ending
+    assert [w for w in workers if _running(w)] == []
+    _wait(lambda: not any(_running(k) for k in kids), "the resource tracker to end")
+    assert not list(out.rglob("*.tmp"))                      # what the stopped workers were writing is gone
+    _resume_equals_reference(sim[0], out, ref)
+
+
+def test_workers_end_when_the_parent_is_killed(sim, reference):
+    base, ref = reference
+    out = base / "ds"
+    p = _start(sim[0], out)
+    _, kids = _workers(p)
+    p.kill()
+    p.wait()
+    # without PR_SET_PDEATHSIG the orphans kept encoding for over ten minutes; with it they die at once
+    _wait(lambda: not any(_running(k) for k in kids), "the orphaned workers to end")
+    markers = _markers(out)
+    _resume_equals_reference(sim[0], out, ref)
+    assert markers >= 3
