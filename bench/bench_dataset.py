@@ -8,8 +8,15 @@
    Inputs are the simulated rig's box scene rendered by ray casting at full resolution (a real depth
    map's coherence: random depths would measure cache misses, not the algorithm).
 
-One core: numba, OpenCV and BLAS are pinned to one thread before they load.
-Run: .venv/bin/python bench/bench_dataset.py [--frames N] [--json]
+3. ``--export RECORDING``: the whole export (``platform_tools export ... --workers 2``) of today's code (the
+   dataset package as committed, ``git archive HEAD platform_tools/dataset``, in a copy of this tree: only the
+   export code differs; its command, export_cmd.py, too) beside this tree's, on the same recording, alternating, after one untimed warm-up
+   each (numba compiles into each tree's cache); samples/s end to end (wall clock, indexing included) and the
+   ratio; then every file of the two outputs compared (bytes; PNGs that differ are decoded and compared).
+   A full-size recording: ``platform_tools simulate-rig --out DIR --duration 12 --scale 1``.
+
+One core for 1 and 2: numba, OpenCV and BLAS are pinned to one thread before they load.
+Run: .venv/bin/python bench/bench_dataset.py [--frames N] [--json] [--export RECORDING [--rate HZ] [--repeats N]]
 """
 from __future__ import annotations
 
@@ -60,11 +67,107 @@ def rate(fn, n: int) -> float:
     return n / (time.perf_counter() - t)
 
 
+#: the export's code taken from git HEAD for the previous run: the dataset package and its command
+PREVIOUS = ("platform_tools/dataset", "platform_tools/cli/export_cmd.py")
+
+
+def previous_tree(tmp: Path) -> Path:
+    """A copy of this tree whose export code (PREVIOUS) is the committed one (git HEAD)."""
+    import shutil
+    import subprocess
+    import tarfile
+    tree = tmp / "previous"
+    shutil.copytree(REPO, tree, ignore=shutil.ignore_patterns(".git", ".venv", "build", "__pycache__",
+                                                              "*.egg-info", "node_modules"))
+    shutil.rmtree(tree / "platform_tools" / "dataset")
+    archive = subprocess.run(["git", "-C", str(REPO), "archive", "--format=tar", "HEAD", *PREVIOUS],
+                             check=True, capture_output=True).stdout
+    with tarfile.open(fileobj=__import__("io").BytesIO(archive)) as tar:
+        tar.extractall(tree)
+    return tree
+
+
+def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int) -> tuple[float, int]:
+    """(seconds, samples) of one `platform_tools export` run with ``tree``'s code."""
+    import shutil
+    import subprocess
+    shutil.rmtree(out, ignore_errors=True)
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    for var in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        env.pop(var, None)
+    cmd = [sys.executable, "-c", "import sys; from platform_tools.cli.main import main; sys.exit(main())",
+           "export", str(recording), "--out", str(out), "--rate", str(rate), "--workers", str(workers),
+           "--json", "-q"]
+    t = time.perf_counter()
+    r = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True)
+    dt = time.perf_counter() - t
+    if r.returncode != 0:
+        raise SystemExit(f"{tree}: export failed: {r.stderr.strip().splitlines()[-1:]}")
+    return dt, json.loads(r.stdout)["samples"]
+
+
+def compare_outputs(a: Path, b: Path) -> dict:
+    """Every file of both outputs: identical bytes, or (PNG) identical pixels, or different."""
+    fa = {p.relative_to(a) for p in a.rglob("*") if p.is_file()}
+    fb = {p.relative_to(b) for p in b.rglob("*") if p.is_file()}
+    res = {"files": len(fa), "only_in_previous": sorted(map(str, fa - fb)), "only_in_new": sorted(map(str, fb - fa)),
+           "identical_bytes": 0, "same_pixels": [], "different": []}
+    for rel in sorted(fa & fb):
+        if (a / rel).read_bytes() == (b / rel).read_bytes():
+            res["identical_bytes"] += 1
+        elif rel.suffix == ".png" and np.array_equal(cv2.imread(str(a / rel), cv2.IMREAD_UNCHANGED),
+                                                     cv2.imread(str(b / rel), cv2.IMREAD_UNCHANGED)):
+            res["same_pixels"].append(str(rel))
+        else:
+            res["different"].append(str(rel))
+    return res
+
+
+def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2) -> dict:
+    import tempfile
+    with tempfile.TemporaryDirectory(prefix="bench-export-") as tmp:
+        tmp = Path(tmp)
+        trees = {"previous": previous_tree(tmp), "new": REPO}
+        for name, tree in trees.items():          # warm-up: numba compiles into each tree's cache
+            run_export(tree, recording, tmp / f"warm-{name}", max(rate / 4, 0.25), workers)
+        times = {n: [] for n in trees}
+        samples = {}
+        for _ in range(repeats):
+            for name, tree in trees.items():
+                dt, samples[name] = run_export(tree, recording, tmp / f"out-{name}", rate, workers)
+                times[name].append(dt)
+        sps = {n: samples[n] / min(t) for n, t in times.items()}
+        return {"recording": str(recording), "rate_hz": rate, "workers": workers, "samples": samples,
+                "seconds": times, "samples_per_s": sps, "ratio": sps["new"] / sps["previous"],
+                "outputs": compare_outputs(tmp / "out-previous", tmp / "out-new")}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=100, help="frames per 16->8-bit measurement (default 100)")
+    ap.add_argument("--export", type=Path, metavar="RECORDING",
+                    help="only the end-to-end export, previous code beside this tree's, on this recording")
+    ap.add_argument("--rate", type=float, default=1.0, help="with --export: samples per second (default 1)")
+    ap.add_argument("--repeats", type=int, default=2, help="with --export: timed runs of each (default 2; best kept)")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
+    if args.export:
+        r = bench_export(args.export, args.rate, args.repeats)
+        if args.json:
+            print(json.dumps(r, indent=2))
+            return 0
+        o = r["outputs"]
+        print(f"export of {r['recording']} at {r['rate_hz']:g} Hz, {r['workers']} workers, best of "
+              f"{len(r['seconds']['new'])}:")
+        for n in ("previous", "new"):
+            print(f"  {n:<9} {r['samples'][n]:>5} samples in {min(r['seconds'][n]):7.1f} s: "
+                  f"{r['samples_per_s'][n]:6.2f} samples/s  (runs: {', '.join(f'{t:.1f}' for t in r['seconds'][n])} s)")
+        print(f"  ratio new / previous: {r['ratio']:.2f}x")
+        print(f"  outputs: {o['files']} files, {o['identical_bytes']} identical bytes, {len(o['same_pixels'])} PNGs "
+              f"with other bytes but the same pixels, {len(o['different'])} different "
+              f"({', '.join(o['different'][:5])}), only in previous {len(o['only_in_previous'])}, only in new "
+              f"{len(o['only_in_new'])}")
+        return 0
     rig = load_rig()
     res = {}
 
