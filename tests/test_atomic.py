@@ -1,10 +1,12 @@
 """Outputs are written whole or not at all."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
 
+from platform_tools.rig import atomic
 from platform_tools.rig.atomic import OutputDir, OutputError, write_text
 
 
@@ -64,3 +66,32 @@ def test_open_atomic_failure_mid_stream_leaves_nothing(tmp_path: Path):
             f.write(b"partial")
             raise RuntimeError("died mid-write")
     assert list(tmp_path.iterdir()) == []
+
+
+def _leftovers(folder):
+    return sorted(p.name for p in folder.iterdir() if p.name.endswith(".tmp"))
+
+
+def test_an_interrupt_just_after_the_temporary_is_created_removes_it(tmp_path, monkeypatch):
+    """The window mkstemp left open: the file exists, its name not yet returned to the caller."""
+    real_open = os.open
+
+    def open_then_interrupt(path, flags, mode=0o777):
+        fd = real_open(path, flags, mode)
+        os.close(fd)
+        raise KeyboardInterrupt
+    monkeypatch.setattr(atomic.os, "open", open_then_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        write_text(tmp_path / "out.txt", "x")
+    assert _leftovers(tmp_path) == []
+    assert not (tmp_path / "out.txt").exists()
+
+
+def test_someone_elses_file_with_the_temporary_name_is_never_removed(tmp_path, monkeypatch):
+    names = iter(["aaaaaaaaaaaaaaaa", "bbbbbbbbbbbbbbbb"])
+    monkeypatch.setattr(atomic.secrets, "token_hex", lambda n: next(names))
+    theirs = tmp_path / ".out.txt.aaaaaaaaaaaaaaaa.tmp"
+    theirs.write_text("not ours")
+    write_text(tmp_path / "out.txt", "mine")
+    assert theirs.read_text() == "not ours"
+    assert (tmp_path / "out.txt").read_text() == "mine"

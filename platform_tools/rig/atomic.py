@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import secrets
 import shutil
 import tempfile
 from pathlib import Path
@@ -31,14 +32,24 @@ def _check_parent(path: Path) -> None:
 
 @contextlib.contextmanager
 def open_atomic(path: Path | str) -> Iterator[BinaryIO]:
-    """A binary file to stream into; it appears at ``path`` whole when the block ends, never otherwise."""
+    """A binary file to stream into; it appears at ``path`` whole when the block ends, never otherwise.
+
+    The temporary file's name is chosen before it is created, so an interrupt (Ctrl-C, SIGTERM turned
+    into an exception) at any point, even just after the file is created, removes it: ``mkstemp``
+    returns the name only after creating the file, leaving a window where nobody knew what to remove."""
     path = Path(path)
     _check_parent(path)
+    tmp: Path | None = None
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    except OSError as exc:
-        raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
-    try:
+        while True:
+            tmp = path.parent / f".{path.name}.{secrets.token_hex(8)}.tmp"
+            try:
+                fd = os.open(tmp, _CREATE_FLAGS, 0o600)
+                break
+            except FileExistsError:      # someone else's file: never removed, try another name
+                tmp = None
+            except OSError as exc:
+                raise OutputError(f"{path}: cannot write ({exc.strerror or exc})") from None
         with os.fdopen(fd, "wb") as f:
             yield f
             f.flush()
@@ -46,8 +57,12 @@ def open_atomic(path: Path | str) -> Iterator[BinaryIO]:
         os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)
         raise
+
+
+_CREATE_FLAGS = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0)
 
 
 def write_bytes(path: Path | str, data: bytes) -> Path:
