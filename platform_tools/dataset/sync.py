@@ -27,7 +27,7 @@ import numpy as np
 import logging
 
 from .recording import CAMERAS, Recording, RecordingError
-from . import counters, trigger as trig
+from . import counters, motion, trigger as trig
 
 log = logging.getLogger(__name__)
 
@@ -312,12 +312,14 @@ def offsets_ns(rec: Recording, rig) -> dict[str, float]:
 
 
 def triggers(rec: Recording, rig) -> "trig.Assignment":
-    """Which trigger exposed every thermal frame (see :mod:`.trigger`); RecordingError when ambiguous."""
+    """Which trigger exposed every thermal frame (see :mod:`.trigger`; image motion, :mod:`.motion`, as the last
+    resort); RecordingError when ambiguous."""
     period = 1e9 / rig.desc.sync.rate_hz
     zl = rec.streams["zed_left"]
     imu = rec.streams["zed_imu"].stamp_ns if rec.has("zed_imu") else None
     ref = trig.reference(zl.stamp_ns, period, imu)
     out = trig.Assignment(period, ref)
+    frames = motion.Reader(rec, rig)        # read only when the stamps leave a camera's offset ambiguous
     windows = rig.desc.sync.stamp_latency_ms
     for cam in ("thermal_left", "thermal_right"):
         st = rec.streams[cam]
@@ -331,7 +333,8 @@ def triggers(rec: Recording, rig) -> "trig.Assignment":
         try:
             out.cameras[cam] = trig.assign(zl.stamp_ns, st.stamp_ns, period, camera=cam, ref=ref,
                                            window_ms=(w.min.value, w.max.value) if w else None,
-                                           counter=counter, where=f"{rec.path}: {st.topic}: ")
+                                           counter=counter, where=f"{rec.path}: {st.topic}: ",
+                                           motion=frames.resolver(cam, ref.trigger))
         except trig.TriggerError as exc:
             raise RecordingError(str(exc)) from None
     return out
@@ -346,7 +349,7 @@ def trigger_report(a: "trig.Assignment") -> dict:
     for cam, ct in a.cameras.items():
         out[cam] = {"segments": [{"frames": [g.first, g.last], "offset_ms": g.offset_ns / 1e6,
                                   "uncertainty_ms": g.uncertainty_ns / 1e6, "established_by": g.established_by,
-                                  "candidates_ms": g.candidates_ms} for g in ct.segments],
+                                  "candidates_ms": g.candidates_ms, "motion": g.motion} for g in ct.segments],
                     "clock_steps": steps(ct), "unassigned_frames": int((ct.trigger < 0).sum()),
                     "jitter_ms": ct.jitter_ns / 1e6,
                     "frame_counter": ({"host_drops": ct.host_drops, "missing_pulses": ct.missing_pulses,

@@ -12,6 +12,9 @@ every clock step of either stream), from the evidence the recording holds:
    pulse (an anchor); one whose counter skipped is a host drop (not an anchor), so fewer gaps decide.
 3. **The rig's stated latency** (``sync.stamp_latency_ms``): a window narrower than a period leaves
    one candidate.
+4. **Image motion** (last resort, :mod:`.motion`, given as ``assign(..., motion=...)``): when the above leave
+   several candidates, the ZED left's and the Boson's per-frame motion signals correlated over them; used only
+   with a clear peak, else the reason joins the missing evidence.
 
 Evidence that disagrees, or none that leaves exactly one candidate, ends in :class:`TriggerError`
 (one line: file, topic, the candidates and the evidence missing), never in a guess.
@@ -77,6 +80,8 @@ class Segment:
     uncertainty_ns: float       # standard error of that offset
     established_by: str
     candidates_ms: list[float]
+    #: the image-motion correlation's figures when it was consulted (motion.Decision.report), else None
+    motion: dict | None = None
 
 
 @dataclass
@@ -202,8 +207,10 @@ def _grid(tz: np.ndarray, kz: np.ndarray, steps: list[Step]):
 # ----------------------------------------------------------------------------- another camera
 def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, window_ms: tuple[float, float] | None,
            counter: np.ndarray | None = None, ref: CameraTriggers | None = None,
-           where: str = "") -> CameraTriggers:
-    """Trigger number of every frame of one camera, in the ZED left's numbering."""
+           where: str = "", motion=None) -> CameraTriggers:
+    """Trigger number of every frame of one camera, in the ZED left's numbering. ``motion``: the last resort,
+    ``(first frame, base indices of the segment's frames, {candidate n: offset ms}) -> motion.Decision``
+    (:meth:`.motion.Reader.resolver`), asked only when the other evidence leaves several candidates."""
     ref = ref or reference(tz, period_ns)
     kz = ref.trigger
     zgrid = _grid(tz, kz, ref.steps)
@@ -272,6 +279,7 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
                                         f" ms ({what})", [round((phase + n) * P / 1e6, 3)]))
                     continue
         margin = max(1e6, 3 * sigma)
+        seen = None                     # the image-motion decision, when it was asked
         cands = [n for n in range(-1, MAX_PERIODS + 1) if (phase + n) * P >= -margin]
         evidence = []
         # trigger gaps: base indices missing in this segment
@@ -333,6 +341,10 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
             evidence.append("causality + the rig's stated latency "
                             f"(sync.stamp_latency_ms.{camera}: {window_ms[0]:g}..{window_ms[1]:g} ms)"
                             if window_ms is not None else "causality")
+        elif motion is not None and (seen := motion(a, base, {m: (phase + m) * P / 1e6 for m in (in_window or cands)})
+                                     ).n is not None:
+            n = seen.n
+            evidence.append(seen.text)
         else:
             ms = ", ".join(f"{(phase + m) * P / 1e6:.1f}" for m in (in_window or cands)[:4])
             missing = []
@@ -350,11 +362,14 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
                                f"(sync.stamp_latency_ms.{camera}) spans more than one trigger period")
             missing.append(f"{'no' if not gaps else 'too few'} common trigger gaps"
                            + ("" if counter is not None else " and no Boson frame counter (telemetry rows)"))
+            if motion is not None:
+                missing.append(seen.text)
             raise TriggerError(f"{where}{camera}: which trigger exposed frames {a}..{b} is ambiguous: offsets "
                                f"{ms} ms after the ZED all fit; missing evidence: {'; '.join(missing)}")
         trig[a:b + 1] = np.where(_unfit(dev), -1, base - n)
         resid[a:b + 1] = dev
-        segs.append(Segment(a, b, (phase + n) * P, unc, "; ".join(evidence), cand_ms))
+        segs.append(Segment(a, b, (phase + n) * P, unc, "; ".join(evidence), cand_ms,
+                            motion=seen.report if seen is not None else None))
     _refine_counter_steps(own, cuts, segs)
     jit = float(np.std(resid)) if len(resid) > 2 else 0.0
     g = gaps_by_counter
