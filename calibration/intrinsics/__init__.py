@@ -3,6 +3,7 @@
 - :mod:`.mrcal_solver`: mrcal in-process (OPENCV8 or SPLINED_STEREOGRAPHIC, :mod:`.lensmodels`);
 - :mod:`.opencv_solver`: cv2.fisheye (Kannala-Brandt, :mod:`calibration.lens.kannala_brandt`);
 - :mod:`.crossval`: the two halves' disagreement; :mod:`.sensitivity`: first-order bias of a solve;
+- :mod:`.model_choice`: the default lens model, chosen by how well each candidate predicts held-out views;
 - :mod:`.synthetic_corners`: observations through a known lens, for tests and the bench;
 - :mod:`.quiet`: mrcal's C-level stderr chatter kept off the terminal.
 

@@ -80,6 +80,12 @@ def _opencv_half(solution: Solution, idx: np.ndarray):
     return (lambda v: kb.project(v, params)), (lambda q: kb.unproject(q, params))
 
 
+def solve_subset(solution: Solution, idx: np.ndarray):
+    """(project, unproject) of ``solution``'s lens solved again from the views ``idx`` only, from its
+    own answer, with its inlier corners (also used by model_choice.py for held-out views)."""
+    return (_opencv_half if solution.solver == "opencv" else _mrcal_half)(solution, idx)
+
+
 def cross_validate(solution: Solution, *, grid_width: int = GRID_WIDTH) -> CrossValidation | None:
     """The halves' disagreement across the image; None when a half would have fewer than
     mrcal_solver.MIN_IMAGES images (too few to solve: the caller says so)."""
@@ -87,7 +93,7 @@ def cross_validate(solution: Solution, *, grid_width: int = GRID_WIDTH) -> Cross
     a, b = split(solution)
     if min(len(a), len(b)) < MIN_IMAGES:
         return None
-    half = _opencv_half if solution.solver == "opencv" else _mrcal_half
+    half = solve_subset
     stage = "the first half's solve"
     try:
         proj_a, unproj_a = half(solution, a)

@@ -61,8 +61,10 @@ class Solution:
     inlier: np.ndarray                   # (N, H*W) bool: seen and not rejected
     rejected_images: list[RejectedImage] = field(default_factory=list)
     rejected_corners: list[tuple[str, int, int, float]] = field(default_factory=list)  # name, col, row, |res|
-    solver: str = "mrcal"
+    solver: str = "mrcal"                # mrcal | opencv (cv2.fisheye)
     notes: list[str] = field(default_factory=list)
+    board_rt: np.ndarray | None = None   # (N, 6) board poses of a solver without optimization_inputs
+    model_choice: dict | None = None     # how the default model was chosen (model_choice.Choice.summary)
 
     def cameramodel(self, note: str | None = None):
         import mrcal

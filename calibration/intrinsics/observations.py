@@ -21,6 +21,8 @@ class BoardObservations:
     square_m: float
     imagersize: tuple[int, int]    # (width, height) pixels
     missed: list[str] = field(default_factory=list)   # images with no board at all
+    missed_why: list = field(default_factory=list)     # why, per image (calibration/report/missed.py Missed)
+    bit_depth: int | None = None                       # of the input images (8: an AGC'd stream), None: unknown
 
     def __post_init__(self) -> None:
         w, h = self.board
@@ -46,7 +48,8 @@ class BoardObservations:
         if keep.dtype == bool:
             keep = np.flatnonzero(keep)
         return BoardObservations([self.names[i] for i in keep], self.corners[keep], self.weights[keep],
-                                 self.board, self.square_m, self.imagersize, list(self.missed))
+                                 self.board, self.square_m, self.imagersize, list(self.missed),
+                                 list(self.missed_why), self.bit_depth)
 
     def mrcal_array(self) -> np.ndarray:
         """observations_board for mrcal.optimize: (N, H, W, 3) float64, weight -1 where not seen."""

@@ -18,6 +18,7 @@ CORNER_OUTLIER_FLOOR_PX = 0.5
 
 
 def _calibrate(obs: BoardObservations, inlier: np.ndarray, focal_px: float):
+    """(params (8,), residuals (N, H*W, 2) of every seen corner, poses (N, 6) Rodrigues r then t)."""
     import cv2
     board_pts = obs.board_points_m()
     objp, imgp = [], []
@@ -36,14 +37,15 @@ def _calibrate(obs: BoardObservations, inlier: np.ndarray, focal_px: float):
         raise SolveError(f"cv2.fisheye.calibrate failed ({str(exc).strip().splitlines()[-1]}); "
                          f"try --solver mrcal") from None
     params = np.array([K[0, 0], K[1, 1], K[0, 2], K[1, 2], *np.ravel(D)])
+    poses = np.array([np.concatenate([np.ravel(r), np.ravel(t)]) for r, t in zip(rvecs, tvecs)])
     # residuals of every seen corner (outliers included, so they can be judged)
     res = np.full(obs.corners.shape, np.nan)
     for i in range(obs.n):
         m = obs.seen()[i]
-        R = cv2.Rodrigues(rvecs[i])[0]
-        pc = board_pts[m] @ R.T + np.ravel(tvecs[i])
+        R = cv2.Rodrigues(poses[i, :3])[0]
+        pc = board_pts[m] @ R.T + poses[i, 3:]
         res[i, m] = obs.corners[i, m] - kb.project(pc, params)
-    return params, res, np.array([np.concatenate([np.ravel(r), np.ravel(t)]) for r, t in zip(rvecs, tvecs)])
+    return params, res, poses
 
 
 def _per_image(res: np.ndarray, inlier: np.ndarray):
@@ -84,7 +86,7 @@ def solve(obs: BoardObservations, *, focal_px: float, max_image_rejections: int 
     corners = [(obs.names[i], int(k % w), int(k // w), float(np.linalg.norm(res[i, k])))
                for i, k in zip(*np.nonzero(obs.seen() & ~inlier))]
     sol = Solution(kb.NAME, params, obs.imagersize, obs, {}, rms, per, res, inlier, rejected, corners,
-                   solver="opencv")
+                   solver="opencv", board_rt=poses)
     sol.notes.append("OpenCV fisheye (Kannala-Brandt); no projection uncertainty (mrcal computes that "
                      "from its own solve only)")
     return sol

@@ -52,14 +52,27 @@ def _rotation_facing(ray: np.ndarray, tilt_deg: float, rng: np.random.Generator)
     return mrcal.r_from_R(R @ tilt)
 
 
-def simulate(lensmodel: str, intrinsics: np.ndarray, imagersize: tuple[int, int], *,
+def simulate(lensmodel, intrinsics: np.ndarray | None, imagersize: tuple[int, int], *,
              board: tuple[int, int] = (10, 7), square_m: float = 0.04, n: int = 30,
              noise_px: float = 0.05, seed: int = 0, region: str = "full",
              distance_m: tuple[float, float] = (0.35, 0.9), tilt_deg: float = 40.0,
              min_corners: int = 12) -> SyntheticCorners:
     """``n`` board observations. ``region``: 'full' places board centres all over the imager (up
-    to its edges, so many boards are partial); 'centre' keeps them in the middle 30%."""
+    to its edges, so many boards are partial); 'centre' keeps them in the middle 30%.
+    ``lensmodel``: an mrcal lens-model name (with ``intrinsics``), or any lens object with
+    ``project(points)`` and ``unproject(pixels)`` methods (e.g. a truth lens of another family,
+    calibration/synth/truth_lens.py; ``intrinsics`` None), so corners need not come from mrcal's models."""
     import mrcal
+    if isinstance(lensmodel, str):
+        def project(p):
+            return mrcal.project(p, lensmodel, intrinsics)
+
+        def unproject(q):
+            return mrcal.unproject(q, lensmodel, intrinsics, normalize=True)
+    else:
+        lens = lensmodel
+        project, unproject = lens.project, lens.unproject
+        lensmodel, intrinsics = lens.intrinsics()
     rng = np.random.default_rng(seed)
     w, h = imagersize
     bw, bh = board
@@ -78,14 +91,14 @@ def simulate(lensmodel: str, intrinsics: np.ndarray, imagersize: tuple[int, int]
             q = np.array([rng.uniform(0.35, 0.65) * w, rng.uniform(0.35, 0.65) * h])
         else:
             q = np.array([rng.uniform(0.0, 1.0) * w, rng.uniform(0.0, 1.0) * h])
-        ray = mrcal.unproject(q, lensmodel, intrinsics, normalize=True)
+        ray = unproject(q)
         r = _rotation_facing(ray, tilt_deg, rng)
         t = ray * rng.uniform(*distance_m) - mrcal.rotate_point_r(r, centre_obj)
         rt = np.concatenate([r, t])
         pcam = mrcal.transform_point_rt(rt, obj)
         if (pcam[:, 2] <= 0.05).any():
             continue
-        qc = mrcal.project(pcam, lensmodel, intrinsics)
+        qc = project(pcam)
         qc = qc + rng.normal(0.0, noise_px, qc.shape)
         inside = (qc[:, 0] >= 0) & (qc[:, 0] <= w - 1) & (qc[:, 1] >= 0) & (qc[:, 1] <= h - 1)
         if region == "centre" and not inside.all():

@@ -10,7 +10,7 @@ import numpy as np
 from platform_tools.rig.cameras import camera_model
 
 from calibration import formats
-from calibration.report import analysis, html
+from calibration.report import analysis, html, input_depth, missed
 from calibration.report.validity import validity
 from calibration.report.verdict import Verdict, judge
 from calibration.intrinsics import crossval
@@ -93,6 +93,9 @@ def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: s
                     uncertainty_max_px=None if unc is None else unc.max_px,
                     validity=val, cross_validated=None if not cross_validate or cv_error else cv is not None,
                     lens_problems=lens_check.problems(lens_health), cross_validation_error=cv_error)
+    depth = input_depth.note(obs.bit_depth)
+    if depth is not None:
+        verdict.warnings.append(depth.text)
     fmt = {"ROS camera_info": ros.summary(), "Kalibr camchain": kal.summary(),
            "OpenCV YAML": ocv.summary()}
     if rational is not None:
@@ -103,6 +106,8 @@ def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: s
         intrinsics_text=" ".join(f"{x:.6g}" for x in solution.intrinsics),
         imagersize=list(solution.imagersize), board=list(obs.board), square_m=obs.square_m,
         rms_px=solution.rms_px, n_images_used=obs.n, n_missed=len(obs.missed), missed=list(obs.missed),
+        missed_why=[m.to_dict() for m in obs.missed_why], missed_causes=missed.counts(obs.missed_why),
+        input_bit_depth=obs.bit_depth, input_note=None if depth is None else depth.text,
         n_rejected_images=len(solution.rejected_images),
         rejected_images=[dict(name=r.name, rms_px=r.rms_px, reason=r.reason) for r in solution.rejected_images],
         n_corners=int(solution.inlier.sum()), n_rejected_corners=len(solution.rejected_corners),
@@ -114,6 +119,6 @@ def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: s
                                                   observed_noise_px=unc.observed_noise_px),
         cross_validation=None if cv is None else cv.summary(), cross_validation_error=cv_error,
         validity=val.summary(), lens_health={name: h.summary() for name, h in lens_health.items()},
-        formats=fmt, notes=list(solution.notes), rig_hash=rig_hash, verdict=verdict.to_dict())
+        formats=fmt, notes=list(solution.notes), model_choice=solution.model_choice, rig_hash=rig_hash, verdict=verdict.to_dict())
     files["report.html"] = html.render(summary, verdict, html.plots(solution, cov, unc, cv, val))
     return Outputs(files, summary, verdict)

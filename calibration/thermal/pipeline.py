@@ -66,6 +66,8 @@ def detect(images: str, board: tuple[int, int], square_m: float,
     wts = [r.detection.weight for r in good]
     obs = from_detections(names, dets, board, square_m, imagersize, wts)
     obs.missed.extend(r.path.name for r in bad)
+    obs.missed_why = _why_missed(good, bad)
+    obs.bit_depth = _bit_depth([r.path for r in good])
     rows = [BoardCorners(r.path.name, r.detection.corners if r.detection.detected else None,
                          r.detection.level if r.detection.detected else None) for r in good]
     rows += [BoardCorners(r.path.name, None, None) for r in bad]
@@ -77,20 +79,40 @@ def detect(images: str, board: tuple[int, int], square_m: float,
     return obs, format_corners(rows)
 
 
+def _why_missed(good, bad) -> list:
+    """calibration/report/missed.py's cause for every image without a board."""
+    from calibration.report.missed import classify
+    out = [classify(r.path.name, r.detection.reason, r.detection.candidates) for r in good if not r.detection.detected]
+    return out + [classify(r.path.name, r.error[len(str(r.path)) + 2:] if r.error.startswith(str(r.path)) else r.error)
+                  for r in bad]
+
+
+def _bit_depth(paths) -> int | None:
+    """8 when any input image is 8-bit (an AGC'd stream: the report says what that costs), 16 when all
+    are 16-bit, None when unknown."""
+    import cv2
+    depths = set()
+    for p in paths:
+        img = cv2.imread(str(p), cv2.IMREAD_UNCHANGED)
+        if img is not None:
+            depths.add(8 * img.dtype.itemsize)
+    return min(depths) if depths else None
+
+
 def solve(obs: BoardObservations, *, solver: str, lens_model: str | None, focal_px: float,
           nominal_corner_angle_deg: float = 0.0):
     """The lens from the observations: ``solver`` "mrcal" (``lens_model`` a name lensmodels.resolve
     accepts, None: chosen by the data, below) or "opencv" (cv2.fisheye); ``focal_px`` the nominal focal
     length, the seed. Returns an :class:`~calibration.intrinsics.mrcal_solver.Solution`.
 
-    The default (``lens_model`` None, mrcal) is OPENCV8 when the solved lens has no pole or fold out to
-    the image corners' angle (the widest of its own, the data's and ``nominal_corner_angle_deg``) and
-    round-trips over the whole image (thermal/lens_check.py); when it does not, OpenCV's Kannala-Brandt
-    fisheye (no rational denominator to reach zero) on the same corners, if that one holds; the note
-    says which and why."""
+    The default (``lens_model`` None, mrcal) is chosen by the data between OPENCV8 (mrcal) and OpenCV's
+    Kannala-Brandt fisheye solved from the same corners: a model with a pole or fold out to the image
+    corners' angle (the widest of its own, the data's and ``nominal_corner_angle_deg``) or that does not
+    round-trip over the whole image (thermal/lens_check.py) is out; between two healthy ones, the one
+    that predicts held-out views better (calibration/intrinsics/model_choice.py: Kannala-Brandt unless
+    OPENCV8 is significantly better). The notes say which and why."""
     from calibration.intrinsics import SolveError, mrcal_solver, opencv_solver
     from calibration.intrinsics.lensmodels import LensModelError
-    from calibration.thermal.lens_check import solution_health
     try:
         if solver == "opencv":
             if lens_model is not None:
@@ -99,25 +121,43 @@ def solve(obs: BoardObservations, *, solver: str, lens_model: str | None, focal_
         solution = mrcal_solver.solve(obs, lensmodel=lens_model, focal_px=focal_px)
         if lens_model is not None:
             return solution
-        h = solution_health(solution, min_corner_angle_deg=nominal_corner_angle_deg)
-        if h.ok:
-            solution.notes.append("lens model chosen by the data: OPENCV8 (no pole or fold out to "
-                                  f"{h.corner_angle_deg:.1f} deg, round trip within {h.round_trip_max_px:.1g} px)")
-            return solution
         try:
             alt = opencv_solver.solve(obs, focal_px=focal_px)
         except SolveError:
-            return solution
-        h_alt = solution_health(alt, min_corner_angle_deg=nominal_corner_angle_deg)
-        if not h_alt.ok:
-            return solution            # the verdict names what is wrong with it
-        alt.notes.append(f"lens model chosen by the data: Kannala-Brandt (OpenCV fisheye), because OPENCV8 "
-                         f"is unusable here: {h.problem()}")
-        return alt
+            alt = None
+        return _choose(solution, alt, nominal_corner_angle_deg)
     except LensModelError as exc:
         raise UserError(str(exc)) from None
     except SolveError as exc:
         raise CheckFailed(str(exc)) from None
+
+
+def _choose(o8, kb, nominal_corner_angle_deg: float):
+    """The default model: see :func:`solve`."""
+    from calibration.intrinsics.model_choice import ModelChoiceError, choose
+    from calibration.thermal.lens_check import solution_health
+    h8 = solution_health(o8, min_corner_angle_deg=nominal_corner_angle_deg)
+    hk = None if kb is None else solution_health(kb, min_corner_angle_deg=nominal_corner_angle_deg)
+    if hk is None or not hk.ok:
+        if h8.ok:
+            why = "could not be solved" if hk is None else f"is unusable: {hk.problem()}"
+            o8.notes.append(f"lens model chosen by the data: OPENCV8 (no pole or fold out to "
+                            f"{h8.corner_angle_deg:.1f} deg, round trip within {h8.round_trip_max_px:.1g} px); "
+                            f"Kannala-Brandt {why}")
+        return o8                  # when neither holds, the verdict names what is wrong with OPENCV8
+    if not h8.ok:
+        kb.notes.append(f"lens model chosen by the data: Kannala-Brandt (OpenCV fisheye), because OPENCV8 "
+                        f"is unusable here: {h8.problem()}")
+        return kb
+    try:
+        c = choose(kb, o8)
+    except ModelChoiceError as exc:
+        o8.notes.append(f"lens model: OPENCV8, held-out comparison with Kannala-Brandt not possible ({exc})")
+        return o8
+    best = (kb, o8)[c.chosen]
+    best.notes.append(f"lens model chosen by the data: {c.note()}")
+    best.model_choice = c.summary()
+    return best
 
 
 def calibrate(images: str, board: tuple[int, int], square_m: float, *, solver: str, lens_model: str | None,
