@@ -18,8 +18,12 @@ own truth on every board reported (partial ones too); model error vs truth (proj
 after the best-fit rotation, calibration.lens.compare) RMS over the whole image, corners included,
 and over the central 80%; the truth is the lens' own closed-form unprojection.
 
-Usage: .venv/bin/python bench/bench_calib_lenses.py [--n 20] [--seed 11] [--families ...]
-       [--conditions real,hard] [--work DIR]
+For ours the row also names the lens model the default chose (calibration/intrinsics/model_choice.py).
+Each set is rendered twice when --outputs has both: "y16" (16-bit counts) and "agc8" (the same frames
+through the 8-bit AGC, calibration/synth/agc.py), so 16-bit and 8-bit figures are on the same scenes.
+
+Usage: .venv/bin/python bench/bench_calib_lenses.py [--n 40] [--seed 11] [--families ...]
+       [--conditions real,hard] [--outputs y16,agc8] [--work DIR]
 Targets (issue 14 item 4, on 40 images): real: corner RMS <= 0.06 px, model <= 0.10 px whole and
 <= 0.08 px central; hard: >= 85 % complete, corner RMS <= 0.30 px, no corner > 3 px, model <= 0.5 px
 whole and <= 0.25 px central.
@@ -63,14 +67,16 @@ def model_error(proj, lens, size) -> tuple[float, float] | None:
     return c.rms_px, c.central_rms_px
 
 
-def run_set(family: str, condition: str, n: int, seed: int, work: Path) -> list[dict]:
+def run_set(family: str, condition: str, n: int, seed: int, work: Path, output: str = "y16",
+            rig=None) -> list[dict]:
     import json
-    lens = truth_lens(family)
-    src = work / f"{family}_{condition}"
+    lens = truth_lens(family, rig=rig)
+    tag = f"{family}_{condition}_{output}"
+    src = work / tag
     t = time.perf_counter()
     render_dataset(src, n=n, difficulty=condition, board=BOARD, square=SQUARE, seed=seed, lens=lens,
-                   show_progress=False)
-    print(f"  rendered {family} {condition}: {n} images in {time.perf_counter() - t:.0f} s", flush=True)
+                   show_progress=False, output=output, rig=rig)
+    print(f"  rendered {family} {condition} {output}: {n} images in {time.perf_counter() - t:.0f} s", flush=True)
     truth = json.loads((src / "truth.json").read_text())
     size = tuple(truth["imagersize"])
     files = [im["file"] for im in truth["images"]]
@@ -78,16 +84,15 @@ def run_set(family: str, condition: str, n: int, seed: int, work: Path) -> list[
     ours_det, _ = bd.run_ours(src, files, BOARD, partial=partial)
     cv_det, _ = bd.run_opencv(src, files, BOARD)
     mg_det, _ = bd.run_mrgingham(src, files, BOARD, work / "mg8")
-    files8 = bi.to8bit(src, work / f"{family}_{condition}_8")
-    solves = {"ours": bi.run_ours(src, work / f"ours_{family}_{condition}", "mrcal"),
+    files8 = bi.to8bit(src, work / f"{tag}_8")
+    solves = {"ours": bi.run_ours(src, work / f"ours_{tag}", "mrcal"),
               "OpenCV SB + fisheye": bi.run_opencv(files8),
-              "mrgingham + mrcal-cc": bi.run_mrgingham(work / f"{family}_{condition}_8",
-                                                       work / f"mrcal_{family}_{condition}")}
+              "mrgingham + mrcal-cc": bi.run_mrgingham(work / f"{tag}_8", work / f"mrcal_{tag}")}
     rows = []
     for name, det in (("ours", ours_det), ("OpenCV SB + fisheye", cv_det), ("mrgingham + mrcal-cc", mg_det)):
         ev = bd.evaluate(src, truth, det)
         proj, _, info = solves[name]
-        rows.append(dict(family=family, condition=condition, method=name, full=ev["full"], found=ev["found"],
+        rows.append(dict(family=family, condition=condition, output=output, method=name, full=ev["full"], found=ev["found"],
                          rms=ev["rms"], over1=ev["wrong"],
                          wild=wild_corners(truth, partial) if name == "ours" else None,
                          model=model_error(proj, lens, size), info=info))
@@ -98,30 +103,37 @@ def fmt(r: dict) -> str:
     m = r["model"]
     model = f"{m[0]:.3f} / {m[1]:.3f}" if m else f"failed ({str(r['info'].get('error', r['info']))[:60]})"
     wild = "" if r["wild"] is None else str(r["wild"])
-    return (f"| {r['family']} | {r['condition']} | {r['method']} | {r['found']}/{r['full']} "
-            f"({100 * r['found'] / max(r['full'], 1):.0f} %) | {r['rms']:.3f} | {r['over1']} | {wild} | {model} |")
+    lm = r["info"].get("lensmodel", "") if isinstance(r["info"], dict) and r["method"] == "ours" else ""
+    lm = {"KANNALA_BRANDT": "KB", "LENSMODEL_OPENCV8": "OPENCV8"}.get(lm, lm)
+    return (f"| {r['family']} | {r['condition']} | {r['output']} | {r['method']}{f' ({lm})' if lm else ''} | "
+            f"{r['found']}/{r['full']} ({100 * r['found'] / max(r['full'], 1):.0f} %) | {r['rms']:.3f} | "
+            f"{r['over1']} | {wild} | {model} |")
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--n", type=int, default=20)
+    ap.add_argument("--n", type=int, default=40)
     ap.add_argument("--seed", type=int, default=11)
     ap.add_argument("--families", default=",".join(FAMILIES))
     ap.add_argument("--conditions", default="real,hard")
+    ap.add_argument("--outputs", default="y16,agc8", help="y16 (16-bit counts), agc8 (8-bit AGC), or both")
     ap.add_argument("--work", type=Path, default=None, help="work folder to keep (default: a temp folder)")
     args = ap.parse_args(argv)
     work = args.work or Path(tempfile.mkdtemp(prefix="bench_calib_lenses."))
     work.mkdir(parents=True, exist_ok=True)
     print(f"{args.n} images per set, board {BOARD[0]}x{BOARD[1]}, seed {args.seed}, work {work}", flush=True)
+    from platform_tools.rig import load_rig
+    rig = load_rig()      # once: the shared tree's rig.yaml may be mid-edit later in a long run
     rows = []
-    for family in args.families.split(","):
-        for condition in args.conditions.split(","):
-            rows += run_set(family, condition, args.n, args.seed, work)
-            for r in rows[-3:]:
-                print(fmt(r), flush=True)
-    print("\n| truth lens | condition | method | complete | corner RMS px | > 1 px | > 3 px (all boards) "
+    for output in args.outputs.split(","):
+        for family in args.families.split(","):
+            for condition in args.conditions.split(","):
+                rows += run_set(family, condition, args.n, args.seed, work, output, rig)
+                for r in rows[-3:]:
+                    print(fmt(r), flush=True)
+    print("\n| truth lens | condition | output | method | complete | corner RMS px | > 1 px | > 3 px (all boards) "
           "| model error whole / central 80 % px |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(fmt(r))
     return 0

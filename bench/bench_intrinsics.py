@@ -81,9 +81,9 @@ def run_ours(src: Path, out: Path, solver: str, lens_model: str | None = None):
     if r.returncode != 0:
         return None, dt, r.stderr.strip().splitlines()[-1:]
     s = json.loads(r.stdout)
-    if solver == "opencv":
+    if solver == "opencv" or s.get("lensmodel") == kb.NAME:     # the default may choose Kannala-Brandt
         p = np.array(s["intrinsics"])
-        return (lambda v: kb.project(v, p)), dt, _info(s)
+        return (lambda v: kb.project(v, p)), dt, dict(_info(s), lensmodel=kb.NAME)
     m = mrcal.cameramodel(str(out / "thermal.cameramodel"))
     return mrcal_project(m), dt, dict(_info(s), lensmodel=m.intrinsics()[0])
 
