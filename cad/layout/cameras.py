@@ -47,8 +47,9 @@ def place_cameras(rig: Rig, c: Constants) -> Cameras:
     # in the camera frame: the sleeve around the body, fins either side, the base block under it
     sleeve = Bounds((cb.lo[0], cb.lo[1] - hs.wall_mm, cb.lo[2] - hs.wall_mm),
                     (cb.hi[0], cb.hi[1] + hs.wall_mm, cb.hi[2] + hs.wall_mm))
+    # the front stop ring (``stop_mm`` thick, ahead of the body's front face) is the camera's axial datum
     hs_local = Bounds((sleeve.lo[0], sleeve.lo[1] - hs.fin_height_mm, sleeve.lo[2] - c.heat_sink_base_mm),
-                      (sleeve.hi[0], sleeve.hi[1] + hs.fin_height_mm, sleeve.hi[2]))
+                      (sleeve.hi[0] + hs.stop_mm, sleeve.hi[1] + hs.fin_height_mm, sleeve.hi[2]))
     thermal = {}
     for side, s in SIDES:
         pose = frames[f"thermal_{side}"].T_rig

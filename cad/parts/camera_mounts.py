@@ -19,9 +19,11 @@ class ZedMount:
     legs: tuple[Bounds, Bounds]
     foot: Bounds
     holes: tuple[Hole, ...]
+    lip: Bounds | None = None   # the registration lip behind the camera (cad/datums.py)
 
     def build(self) -> cq.Shape:
-        body = fuse_all([box(self.shelf), box(self.legs[0]), box(self.legs[1]), box(self.foot)])
+        blocks = [self.shelf, self.legs[0], self.legs[1], self.foot] + ([self.lip] if self.lip is not None else [])
+        body = fuse_all([box(b) for b in blocks])
         return one_solid(cut_all(body, hole_tools(self.holes)))
 
 
@@ -36,7 +38,8 @@ class ThermalMount:
 
 
 def zed_mount(lay: Layout) -> ZedMount:
-    return ZedMount("zed_mount", lay.mounts.zed_shelf, lay.mounts.zed_legs, lay.mounts.zed_foot, lay.holes_for("zed_mount"))
+    m = lay.mounts
+    return ZedMount("zed_mount", m.zed_shelf, m.zed_legs, m.zed_foot, lay.holes_for("zed_mount"), lip=m.zed_lip)
 
 
 def thermal_mount(lay: Layout) -> ThermalMount:
@@ -44,7 +47,8 @@ def thermal_mount(lay: Layout) -> ThermalMount:
 
 
 PRINT = {
-    "zed_mount": PrintSetup((180.0, 0.0, 0.0), "upside down on its shelf: legs and foot stand up from the bed; on its "
-                                                     "back face they floated 2 mm up (the overhang check)"),
+    "zed_mount": PrintSetup((0.0, -90.0, 0.0), "on its back face (the lip, shelf, legs and foot share it): every block "
+                                                "stands up from the bed; upside down on the shelf the registration lip "
+                                                "would hold it 4 mm up"),
     "thermal_mount": PrintSetup((0.0, 0.0, 0.0), "flat, as mounted"),
 }

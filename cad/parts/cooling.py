@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import cadquery as cq
 
 from ..layout import Hole, Layout
-from ..geom import Bounds, box, cut_all, fuse_all, one_solid
+from ..geom import Bounds, box, cut_all, cylinder, fuse_all, one_solid
 from .common import PrintSetup, hole_tools
 
 
@@ -28,11 +28,17 @@ class HeatSink:
     fin_h: float
     base: float
     holes: tuple[Hole, ...]  # in the camera frame
+    #: the front stop (cad/datums.py): a ring ``stop`` thick ahead of the bore, ``stop_bore`` across for the lens
+    stop: float = 0.0
+    stop_bore: float = 0.0
 
     def build(self) -> cq.Shape:
         b, w = self.body, self.wall
         sleeve = Bounds((b.lo[0], b.lo[1] - w, b.lo[2] - w), (b.hi[0], b.hi[1] + w, b.hi[2] + w))
         parts = [box(sleeve), box(Bounds((b.lo[0], sleeve.lo[1], sleeve.lo[2] - self.base), (b.hi[0], sleeve.hi[1], sleeve.lo[2])))]
+        if self.stop > 0:
+            ring = Bounds((b.hi[0] - 0.5, sleeve.lo[1], sleeve.lo[2] - self.base), (b.hi[0] + self.stop, sleeve.hi[1], sleeve.hi[2]))
+            parts.append(box(ring).cut(cylinder(self.stop_bore, self.stop + 1.0, (b.hi[0] - 0.5, 0, 0), (1, 0, 0))))
         height = sleeve.size[2]
         pitch = (height - self.fin_t) / max(self.fins - 1, 1)
         for k in range(self.fins):
@@ -55,7 +61,8 @@ def heat_sink(lay: Layout) -> HeatSink:
     holes = tuple(Hole("heat_sink", tuple(t.pose.inverse().apply(h.origin)), tuple(t.pose.inverse().rotate(h.direction)),
                        h.diameter, h.depth) for h in lay.holes_for("heat_sink_left"))
     return HeatSink("heat_sink", lay.cameras.core.bounds(), hs.wall_mm, hs.fin_count, hs.fin_thickness_mm, hs.fin_height_mm,
-                    lay.c.heat_sink_base_mm, holes)
+                    lay.c.heat_sink_base_mm, holes, stop=hs.stop_mm,
+                    stop_bore=lay.cameras.lens.diameter_mm + 2 * lay.rig.desc.printing.fits.sliding_mm)
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "pair's intrinsics and all extrinsics jointly with mrcal from the CAD poses, and report each "
                     "camera's difference from CAD (mm, deg) and the RGB-to-thermal reprojection error at 1.5 m "
                     "and 5 m. Writes --out: extrinsics.yaml, kalibr_camchain.yaml, rig.urdf, "
-                    "static_transforms.launch.xml, one .cameramodel per camera, report.json.",
+                    "static_transforms.launch.xml, pose_uncertainty.yaml (the prior), one .cameramodel per camera, "
+                    "report.json. Each thermal camera's extrinsics are refined under a prior about its CAD pose whose "
+                    "sigmas are the CAD model's tolerance stack-up (--prior).",
         epilog="Exit codes: 0 solved (a camera beyond the tolerance is a warning), 1 not solvable, 2 bad input.")
     p.add_argument("--images", required=True, type=Path, metavar="DIR", help="folder with one sub-folder per camera")
     p.add_argument("--board", default="10x7", metavar="WxH", help="inner corners across x down (default 10x7)")
@@ -43,6 +45,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                                                                     "from its CAD pose (default 5 mm)")
     p.add_argument("--tolerance-deg", type=float, default=1.0, help="warn when a camera is turned more than this "
                                                                      "from its CAD pose (default 1 deg)")
+    p.add_argument("--prior", choices=("stack-up", "none"), default="stack-up",
+                   help="the prior on each thermal camera's extrinsics about its CAD pose: the CAD model's tolerance "
+                        "stack-up (default; its sigmas follow the fits and the printer tolerance of the rig, "
+                        "written to pose_uncertainty.yaml) or none")
     p.add_argument("--pair-tolerance-ms", type=float, default=None,
                    help="timestamp pairing tolerance (default: the rig's processing.pair_tolerance_ms)")
     add_rig_options(p)
@@ -51,9 +57,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_rig(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from calibration.extrinsics.cad import CAMERAS
     from calibration.extrinsics.outputs import all_files, cameramodel_text
-    from calibration.extrinsics.refine import differences_from_cad, reprojection, seeds, solve_with_halves
+    from calibration.extrinsics.prior import stack_up_priors
+    from calibration.extrinsics.refine import (differences_from_cad, prior_distance, reprojection, seeds,
+                                               solve_with_halves)
     from calibration.extrinsics.sets import SetError, detect_sets, find_sets, usable
     from calibration.extrinsics.solve import refined_tree
     from calibration.commands.extrinsics import frames_or_user_error
@@ -75,11 +85,14 @@ def cmd_rig(args: argparse.Namespace) -> int:
         obs = usable(detect_sets(sets, board, args.square, show_progress=not args.quiet))
     except SetError as exc:
         raise UserError(str(exc)) from None
-    sol, halves = solve_with_halves(obs, seeds(rig, obs, args.zed_models), cad,
-                                    zed_intrinsics=args.zed_intrinsics)
+    priors = stack_up_priors(rig) if args.prior == "stack-up" else {}
+    sol, halves = solve_with_halves(obs, seeds(rig, obs, args.zed_models), cad, zed_intrinsics=args.zed_intrinsics,
+                                    prior={c: p.covariance_optical for c, p in priors.items()})
     tree = refined_tree(cad, sol)
     diffs, warnings = differences_from_cad(cad, tree, tolerance_mm=args.tolerance_mm,
                                            tolerance_deg=args.tolerance_deg)
+    sigmas, prior_warnings = prior_distance(cad, tree, priors)
+    warnings += prior_warnings
     reproj = reprojection(cad, sol, halves)
     report = {
         "images": str(args.images), "sets": len(sets), "sets_used": obs.n, "sets_dropped": obs.dropped,
@@ -88,6 +101,11 @@ def cmd_rig(args: argparse.Namespace) -> int:
         "rms_px": sol.rms_px, "observations": sol.n_obs, "outlier_corners": sol.n_outliers,
         "difference_from_cad": diffs, "tolerance": {"mm": args.tolerance_mm, "deg": args.tolerance_deg},
         "warnings": warnings, "rgb_to_thermal_reprojection": reproj,
+        "prior": {"source": "the CAD tolerance stack-up (pose_uncertainty.yaml)" if priors else "none",
+                  "sigmas_from_cad": {c: round(v, 3) for c, v in sigmas.items()},
+                  "sigma_optical_mm_deg": {c: [round(float(v), 5) for v in p.sigma_optical[:3]]
+                                           + [round(float(v), 5) for v in np.degrees(p.sigma_optical[3:])]
+                                           for c, p in priors.items()}},
         "intrinsics": {c: {"lensmodel": l.intrinsics()[0], "intrinsics": [float(x) for x in l.intrinsics()[1]],
                            "imagersize": [int(x) for x in l.imagersize()]} for c, l in sol.lenses.items()}}
     models = {}

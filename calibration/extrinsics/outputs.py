@@ -162,9 +162,12 @@ def nominal_lenses(rig) -> dict:
 
 def all_files(tree: FrameTree, lenses: dict, rig, *, source: str,
               extra: dict | None = None, models: dict[str, str] | None = None) -> dict[str, str]:
-    """Every output file, name -> text."""
+    """Every output file, name -> text; ``pose_uncertainty.yaml`` is the CAD poses' expected error from the
+    tolerance stack-up (calibration/extrinsics/prior.py), the prior ``calibrate rig`` refines them under."""
+    from .prior import pose_uncertainty_yaml
     topics = dict(rig.to_data().get("on_device", {}).get("topics", {}))
     files = {"extrinsics.yaml": extrinsics_yaml(tree, source=source, extra=extra),
+             "pose_uncertainty.yaml": pose_uncertainty_yaml(rig),
              "kalibr_camchain.yaml": kalibr_camchain(tree, lenses, topics),
              "rig.urdf": urdf(tree, robot=rig.desc.name),
              "static_transforms.launch.xml": launch_xml(tree)}

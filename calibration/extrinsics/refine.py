@@ -63,16 +63,17 @@ def seeds(rig, obs: RigObservations, zed_models: Path | None) -> dict:
 
 
 def solve_with_halves(obs: RigObservations, seed_lenses: dict, cad: FrameTree, *,
-                      zed_intrinsics: str) -> tuple[RigSolution, list[RigSolution] | None]:
-    """The joint solve of all sets, and of the even and the odd sets (None below MIN_SETS_FOR_HALVES sets);
-    CheckFailed with one line when mrcal cannot solve it."""
+                      zed_intrinsics: str, prior: dict | None = None) -> tuple[RigSolution, list[RigSolution] | None]:
+    """The joint solve of all sets, and of the even and the odd sets (None below MIN_SETS_FOR_HALVES sets),
+    each with ``prior`` (camera -> covariance, :func:`calibration.extrinsics.solve.solve_rig`); CheckFailed
+    with one line when mrcal cannot solve it."""
     try:
-        sol = solve_rig(obs, seed_lenses, cad, zed_intrinsics=zed_intrinsics)
+        sol = solve_rig(obs, seed_lenses, cad, zed_intrinsics=zed_intrinsics, prior=prior)
         halves = None
         if obs.n >= MIN_SETS_FOR_HALVES:
             idx = np.arange(obs.n)
-            halves = [solve_rig(obs.subset(idx % 2 == k), seed_lenses, cad, zed_intrinsics=zed_intrinsics)
-                      for k in (0, 1)]
+            halves = [solve_rig(obs.subset(idx % 2 == k), seed_lenses, cad, zed_intrinsics=zed_intrinsics,
+                                prior=prior) for k in (0, 1)]
     except RigSolveError as exc:
         raise CheckFailed(str(exc)) from None
     except Exception as exc:   # mrcal reports a singular problem as a bare exception
@@ -97,6 +98,29 @@ def differences_from_cad(cad: FrameTree, tree: FrameTree, *, tolerance_mm: float
             warnings.append(f"{c} is {mm:.2f} mm and {deg:.3f} deg from its CAD pose (tolerance {tolerance_mm:g} "
                             f"mm, {tolerance_deg:g} deg): check how it is mounted")
     return diffs, warnings
+
+
+#: a built rig's camera is within this Mahalanobis distance of its CAD pose with 99.73 % probability under
+#: the stack-up prior (chi-square, 6 degrees of freedom: the "3 sigma" of one axis)
+PRIOR_LIMIT_SIGMA = 4.48
+
+
+def prior_distance(cad: FrameTree, tree: FrameTree, priors: dict) -> tuple[dict[str, float], list[str]]:
+    """Per camera with a prior: how many sigmas (Mahalanobis distance under its stack-up covariance) its
+    solved pose is from CAD relative to the ZED left camera, and a warning beyond PRIOR_LIMIT_SIGMA: the
+    camera sits further from CAD than the tolerances allow, so the prior pulls the solve towards CAD."""
+    out, warnings = {}, []
+    zl = CAMERAS["zed_left"]
+    for c, pr in priors.items():
+        D = cad.T(zl, CAMERAS[c]).inverse() @ tree.T(zl, CAMERAS[c])
+        xi = np.concatenate([D.t, D.rt()[:3]])
+        m = float(np.sqrt(xi @ np.linalg.solve(pr.covariance_optical + 1e-12 * np.eye(6), xi)))
+        out[c] = m
+        if m > PRIOR_LIMIT_SIGMA:
+            warnings.append(f"{c} is {m:.1f} sigma from its CAD pose under the tolerance stack-up (a built rig is within "
+                            f"{PRIOR_LIMIT_SIGMA:g} with 99.7 %): the prior pulls it towards CAD; check how it is mounted, "
+                            f"or solve with --prior none")
+    return out, warnings
 
 
 def reprojection(cad: FrameTree, sol: RigSolution, halves: list[RigSolution] | None = None) -> dict:

@@ -111,20 +111,62 @@ def _seed_frames(obs: RigObservations, intrinsics: np.ndarray, T_ref_cam: dict[s
     return frames
 
 
-def optimize_holding(oi: dict, hold: list[int], iterations: int = 30) -> None:
+def prior_residuals(oi: dict, prior: dict, T_ref_cad: dict[str, Pose], scale: float) -> np.ndarray:
+    """The extrinsics prior's residuals: per camera with a prior, ``scale * L^-1 xi`` where ``xi`` is the
+    camera's pose against CAD relative to the reference camera (the twist of ``T_cad^-1 T``, mm and
+    rad, optical axes) and ``L L^T`` the prior's covariance; ``scale`` puts them in pixels (the
+    measurements' noise), so a camera one sigma from CAD costs what one pixel of noise costs."""
+    out = []
+    for c, cov in prior.items():
+        k = ORDER.index(c) - 1
+        T = Pose.from_rt(oi["extrinsics_rt_fromref"][k], metres=True).inverse()
+        D = T_ref_cad[c].inverse() @ T
+        xi = np.concatenate([D.t, D.rt()[:3]])
+        # a floor of 1e-12 (mm^2, rad^2) keeps a rig with zero tolerances on some axis solvable (a stiff prior)
+        out.append(scale * np.linalg.solve(np.linalg.cholesky(cov + 1e-12 * np.eye(6)), xi))
+    return np.concatenate(out) if out else np.zeros(0)
+
+
+def optimize_holding(oi: dict, hold: list[int], iterations: int = 30, prior: dict | None = None,
+                     T_ref_cad: dict[str, Pose] | None = None) -> None:
     """Minimise mrcal's own cost (its residuals and regularisation, as ``mrcal.optimizer_callback``
     gives them) over every state mrcal would optimise except the intrinsics of the cameras ``hold``:
     Levenberg-Marquardt on mrcal's Jacobian with those columns removed. mrcal 2.2 can only hold every
     camera's lens or none; this is the joint solve with the ZED's lens held. Outlier weights stay as
-    the previous mrcal.optimize left them. Updates ``oi`` in place."""
+    the previous mrcal.optimize left them. ``prior`` (camera -> 6x6 covariance, mm and rad, optical
+    axes; :func:`prior_residuals`) adds the CAD stack-up's prior on those cameras' extrinsics (about
+    ``T_ref_cad``), its Jacobian by central differences on the six packed states of each. Updates
+    ``oi`` in place."""
     import mrcal
+    import scipy.sparse as sp
     n_cam = oi["intrinsics"].shape[0]
     per = mrcal.num_states_intrinsics(**oi) // n_cam
     keys = ("intrinsics", "extrinsics_rt_fromref", "frames_rt_toref", "calobject_warp")
+    prior = prior or {}
+    if prior:   # the measurements' noise (px) that the prior's residuals are scaled by
+        x0 = mrcal.optimizer_callback(**oi, no_factorization=True, no_jacobian=True)[1]
+        scale = float(np.sqrt(np.mean(x0 ** 2)))
 
     def evaluate():
         b, x, J, _ = mrcal.optimizer_callback(**oi, no_factorization=True)
-        return b, x, J
+        if not prior:
+            return b, x, J
+        r = prior_residuals(oi, prior, T_ref_cad, scale)
+        Jp = np.zeros((len(r), len(b)))
+        saved = np.array(oi["extrinsics_rt_fromref"], copy=True)
+        for c in prior:
+            i0 = mrcal.state_index_extrinsics(ORDER.index(c) - 1, **oi)
+            for j in range(i0, i0 + 6):
+                cols = []
+                for h in (1e-6, -1e-6):
+                    bb = b.copy()
+                    bb[j] += h
+                    mrcal.ingest_packed_state(bb, **oi)
+                    cols.append(prior_residuals(oi, prior, T_ref_cad, scale))
+                    oi["extrinsics_rt_fromref"][...] = saved
+                Jp[:, j] = (cols[0] - cols[1]) / 2e-6
+        mrcal.ingest_packed_state(b, **oi)
+        return b, np.concatenate([x, r]), sp.vstack([J, sp.csr_matrix(Jp)]).tocsr()
 
     b, x, J = evaluate()
     cols = np.ones(J.shape[1], bool)
@@ -177,13 +219,15 @@ def _rms(oi: dict, obs_cams: np.ndarray) -> tuple[dict[str, float], int]:
 
 
 def solve_rig(obs: RigObservations, seeds: dict, cad: FrameTree, *,
-              zed_intrinsics: str = "fixed") -> RigSolution:
+              zed_intrinsics: str = "fixed", prior: dict | None = None) -> RigSolution:
+    """The joint solve; ``prior``: camera short name -> 6x6 covariance (mm, rad; optical axes) of its pose
+    relative to the ZED left camera about CAD (calibration/extrinsics/prior.py), applied in the last stage."""
     with quiet_stderr():
-        return _solve_rig(obs, seeds, cad, zed_intrinsics)
+        return _solve_rig(obs, seeds, cad, zed_intrinsics, prior)
 
 
 def _solve_rig(obs: RigObservations, seeds: dict, cad: FrameTree,
-               zed_intrinsics: str) -> RigSolution:
+               zed_intrinsics: str, prior: dict | None = None) -> RigSolution:
     import mrcal
     if zed_intrinsics not in ("fixed", "solved"):
         raise ValueError(zed_intrinsics)
@@ -204,7 +248,9 @@ def _solve_rig(obs: RigObservations, seeds: dict, cad: FrameTree,
                   do_apply_outlier_rejection=False)
         mrcal.optimize(**oi)                  # extrinsics and boards under the given ZED lens
         oi.update(do_optimize_intrinsics_core=True, do_optimize_intrinsics_distortions=True)
-        optimize_holding(oi, [ORDER.index("zed_left"), ORDER.index("zed_right")])
+        optimize_holding(oi, [ORDER.index("zed_left"), ORDER.index("zed_right")], prior=prior, T_ref_cad=T_ref_cam)
+    elif prior:
+        optimize_holding(oi, [], prior=prior, T_ref_cad=T_ref_cam)
     if not np.all(np.isfinite(oi["extrinsics_rt_fromref"])):
         raise RigSolveError("the joint solve diverged")
     cams = oi["indices_frame_camintrinsics_camextrinsics"][:, 1]

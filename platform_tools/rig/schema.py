@@ -52,6 +52,9 @@ class PartKind(enum.Enum):
     FUSE = "fuse"
     SCREW = "screw"
     INSERT = "insert"
+    GLAND = "gland"                       # a cable pass-through with strain relief
+    CUTOFF = "cutoff"                     # an under-voltage disconnect
+    INTERFACE_BOARD = "interface_board"   # a board that brings a camera's signals out to connectors
 
 
 class Face(enum.Enum):
@@ -240,6 +243,8 @@ class Printer:
     max_bridge_mm: PosMm
     #: the thinnest wall as a multiple of the nozzle width
     min_wall_nozzles: Annotated[float, Ge(1)] = 2.0
+    #: +- where a printed face or hole lands against its nominal position (the tolerance stack-up, cad/tolerances.py)
+    tolerance_mm: Annotated[float, Unit("mm"), Ge(0)] = 0.2
 
 
 @dataclass(frozen=True)
@@ -252,6 +257,17 @@ class Handles:
 
 
 @dataclass(frozen=True)
+class Ergonomics:
+    """What a hand and a table ask of the rig (cad/ergonomics.py); sources in config/rig.yaml."""
+    #: clear span between a handle's posts (hand-tool handle guidelines: >= 100 mm, 125 mm with gloves)
+    min_clear_span_mm: PosMm = 100.0
+    #: how far a thumb reaches from the grip it holds to press the record button
+    thumb_reach_mm: PosMm = 50.0
+    #: the rig on a table must not tip when tilted this far in any direction
+    min_tilt_deg: Annotated[float, Unit("deg"), Gt(0), Lt(90)] = 10.0
+
+
+@dataclass(frozen=True)
 class HeatSink:
     """The copper heat sink clamped around each Boson body (machined)."""
     material: str
@@ -260,6 +276,12 @@ class HeatSink:
     fin_count: Annotated[int, Ge(1)]
     fin_thickness_mm: PosMm
     fin_height_mm: PosMm
+    #: +- position of a machined face or hole (the stop, the tapped holes: cad/tolerances.py)
+    tolerance_mm: Annotated[float, Unit("mm"), Ge(0)] = 0.1
+    #: diametral clearance of the Boson body in the bore (the fit the drawing asks for)
+    bore_clearance_mm: Annotated[float, Unit("mm"), Ge(0)] = 0.05
+    #: the front stop the Boson's front face registers against: its thickness
+    stop_mm: PosMm = 1.5
 
 
 @dataclass(frozen=True)
@@ -283,6 +305,7 @@ class Enclosure:
     handles: Handles
     heat_sink: HeatSink
     vents: Vents
+    ergonomics: Ergonomics = Ergonomics()
 
 
 @dataclass(frozen=True)
@@ -385,6 +408,9 @@ class Processing:
     #: the nearest point there (the same surface); farther points are occluded
     zbuffer_tolerance_percent: Annotated[float, Gt(0), Lt(100)]
     sync_limits: SyncLimits
+    #: zlib level of the export's PNGs (0 none .. 9 smallest); null: OpenCV's fast default (level 1, RLE strategy),
+    #: measured in docs/dataset.md: level 0 is 12 % faster and 2.7x larger, level 6 7x slower and 22 % smaller
+    png_compression_level: Optional[Annotated[int, Ge(0), Le(9)]] = None
 
 
 # ----------------------------------------------------------------------------- on-device stack (issue 8)
@@ -408,9 +434,6 @@ class Images:
     zed: str
     thermal: str
     tools: str
-    #: zlib level of the export's PNGs (0 none .. 9 smallest); null: OpenCV's fast default (level 1, RLE strategy),
-    #: measured in docs/dataset.md: level 0 is 12 % faster and 2.7x larger, level 6 7x slower and 22 % smaller
-    png_compression_level: Optional[Annotated[int, Ge(0), Le(9)]] = None
 
 
 @dataclass(frozen=True)

@@ -51,8 +51,11 @@ def test_heat_sink_volume_matches_its_drawing(rig, asm):
     fins = 2 * hs.fin_count * hs.fin_thickness_mm * hs.fin_height_mm * x
     block = (y + 2 * w) * base * x
     holes = sum(np.pi / 4 * h.diameter ** 2 * min(h.depth, base) for h in asm.node("heat_sink_left").spec.holes)
+    # the front stop ring: the sleeve and block's section, stop_mm thick, bored for the lens
+    bore = asm.layout.cameras.lens.diameter_mm + 2 * rig.desc.printing.fits.sliding_mm
+    ring = ((y + 2 * w) * (z + 2 * w + base) - np.pi / 4 * bore ** 2) * hs.stop_mm
     vol = asm.node("heat_sink_left").local_shape(asm.cache).Volume()
-    assert vol == pytest.approx(sleeve + fins + block - holes, rel=0.01)
+    assert vol == pytest.approx(sleeve + fins + block + ring - holes, rel=0.01)
 
 
 @pytest.mark.slow

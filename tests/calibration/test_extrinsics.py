@@ -53,8 +53,8 @@ def test_outputs(out, moved_rig):
     tree = cad_frames(moved_rig)
     names = sorted(p.name for p in out.iterdir())
     assert names == sorted(["extrinsics.yaml", "kalibr_camchain.yaml", "rig.urdf", "static_transforms.launch.xml",
-                            "zed_x_left.cameramodel", "zed_x_right.cameramodel", "thermal_left.cameramodel",
-                            "thermal_right.cameramodel"])
+                            "pose_uncertainty.yaml", "zed_x_left.cameramodel", "zed_x_right.cameramodel",
+                            "thermal_left.cameramodel", "thermal_right.cameramodel"])
     doc = yaml.safe_load((out / "extrinsics.yaml").read_text())
     assert "maps" in doc["convention"] and "x right, y down, z forward" in doc["convention"]
     frames = list(CAMERAS.values()) + [IMU]
@@ -185,3 +185,24 @@ def test_overlapping_cameras_are_bad_input(tmp_path):
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and "overlap" in lines[0] and "Traceback" not in r.stderr
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_pose_uncertainty_is_written_beside_the_extrinsics(out, moved_rig):
+    # read back from the file: the stack-up of the same (moved) rig, and a covariance that is one
+    from calibration.extrinsics.prior import stack_up_priors
+    doc = yaml.safe_load((out / "pose_uncertainty.yaml").read_text())
+    assert doc["rig_hash"] == moved_rig.hash
+    assert doc["inputs"]["printing.printer.tolerance_mm"] == moved_rig.desc.printing.printer.tolerance_mm
+    priors = stack_up_priors(moved_rig)
+    for c in ("thermal_left", "thermal_right"):
+        cam = doc["cameras"][c]
+        assert cam["relative_to"] == "zed_x"
+        for kind in ("worst_case", "rss", "sigma"):
+            assert len(cam[kind]["xyz_mm"]) == 3 and len(cam[kind]["rpy_deg"]) == 3
+        assert all(w >= r > s > 0 for w, r, s in zip(cam["worst_case"]["xyz_mm"] + cam["worst_case"]["rpy_deg"],
+                                                     cam["rss"]["xyz_mm"] + cam["rss"]["rpy_deg"],
+                                                     cam["sigma"]["xyz_mm"] + cam["sigma"]["rpy_deg"]))
+        C = np.array(cam["covariance_optical"]["matrix"])
+        assert C == pytest.approx(priors[c].covariance_optical, rel=1e-5, abs=1e-12)
+        assert np.all(np.linalg.eigvalsh(C) > 0)

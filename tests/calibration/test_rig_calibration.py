@@ -77,6 +77,45 @@ def test_rig_refines_towards_the_truth(rigset, tmp_path):
     assert (out / "rig.urdf").is_file() and (out / "report.json").is_file()
 
 
+def _from_cad_mm(out: Path, truth: dict) -> dict[str, float]:
+    """How far each thermal camera's refined pose is from CAD relative to the ZED left camera (mm)."""
+    import mrcal
+    cad = {c: Pose.from_rt(truth["cameras"][c]["rt_cam_rig_cad_m"], metres=True).inverse() for c in CAMERAS}
+    d = {}
+    for c in ("thermal_left", "thermal_right"):
+        m = mrcal.cameramodel(str(out / f"{CAMERAS[c].removesuffix('_optical')}.cameramodel"))
+        got = cad["zed_left"].inverse() @ Pose.from_rt(m.extrinsics_rt_fromref(), metres=True).inverse()
+        d[c] = float(np.linalg.norm(((cad["zed_left"].inverse() @ cad[c]).inverse() @ got).t))
+    return d
+
+
+@pytest.mark.slow
+def test_rig_uses_the_stack_up_as_its_prior(rigset, tmp_path, rig):
+    # the same sets solved with the stack-up's prior, a looser printer's, and none: the prior holds the
+    # thermal cameras towards CAD, less when the printer is looser, not at all with --prior none
+    from calibration.extrinsics.prior import stack_up_priors
+    truth = json.loads((rigset / "truth.json").read_text())
+    loose = "printing.printer.tolerance_mm=0.6"
+    runs = {}
+    for name, extra in (("stack-up", []), ("loose", ["--set", loose]), ("none", ["--prior", "none"])):
+        r = run("rig", "--images", str(rigset), "--out", str(tmp_path / name), "--json", "-q", *extra)
+        assert r.returncode == 0, r.stderr
+        runs[name] = (json.loads(r.stdout), _from_cad_mm(tmp_path / name, truth))
+    rep = runs["stack-up"][0]
+    want = stack_up_priors(rig)
+    for c, s in rep["prior"]["sigma_optical_mm_deg"].items():
+        assert s[:3] == pytest.approx(list(want[c].sigma_optical[:3]), rel=1e-4)
+    loose_sigma = runs["loose"][0]["prior"]["sigma_optical_mm_deg"]["thermal_left"]
+    assert loose_sigma[0] > rep["prior"]["sigma_optical_mm_deg"]["thermal_left"][0] * 1.3
+    assert runs["none"][0]["prior"] == {"source": "none", "sigmas_from_cad": {}, "sigma_optical_mm_deg": {}}
+    # the synthetic rig is 1.3-2.9 mm from CAD: several sigma of the stack-up, and said so
+    assert all(v > 4.48 for v in rep["prior"]["sigmas_from_cad"].values())
+    assert any("sigma from its CAD pose" in w for w in rep["warnings"])
+    for c in ("thermal_left", "thermal_right"):
+        held, looser, free = (runs[k][1][c] for k in ("stack-up", "loose", "none"))
+        assert held < looser < free, (c, held, looser, free)
+
+
 def _copy(src: Path, dst: Path) -> Path:
     shutil.copytree(src, dst, ignore=shutil.ignore_patterns("truth*"))
     return dst
