@@ -35,7 +35,7 @@ class Constants:
     lid_lug_mm: float = 4.0
     handle_post_width_mm: float = 16.0
     handle_foot_mm: float = 6.0
-    handle_flange_mm: float = 12.0
+    handle_flange_mm: float = 8.0        # 12 left the grip 88 mm clear: its pads ran into the split lugs beyond 129 mm
     fov_margin_deg: float = 2.0          # windows are cut this much wider than the field of view
     fov_length_mm: float = 400.0         # how far ahead the field-of-view frusta are checked
     battery_screw_engagement_mm: float = 5.0   # thread depth in the dock adapter (estimate)

@@ -12,16 +12,22 @@ from .case import Shell
 from .compute import Compute
 from .constants import SIDES
 from .fits import Fits
+from .handles import Handles
 
 #: the switch and the button sit this far outboard of the Orin's side (clear of its port window)
 CONTROL_OFFSET_MM = 14.0
 #: gap between the rear wall's controls and the antennas' bases
 ANTENNA_GAP_MM = 4.0
+#: the record button stands this far behind the side grip's front foot pad
+BUTTON_PAD_GAP_MM = 3.0
 
 
-def place_controls(rig: Rig, fits: Fits, shell: Shell, compute: Compute) -> dict[str, tuple[PanelPart, Pose]]:
-    """Node name -> (panel part, pose): the switch on the right and the button on the left of the
-    rear wall, at the lid's mid height; an antenna on each side of the roof, just ahead of them."""
+def place_controls(rig: Rig, fits: Fits, shell: Shell, compute: Compute,
+                   handles: Handles | None = None) -> dict[str, tuple[PanelPart, Pose]]:
+    """Node name -> (panel part, pose): the switch on the right of the rear wall, at the lid's mid height;
+    the record button in the lid's left wall under the left side grip, just behind its front foot pad,
+    where the hand holding that grip reaches it (the "ergonomics" check; on the rear wall it was 60 mm
+    from the nearest grip); an antenna on each side of the roof, ahead of the rear wall's controls."""
     o, w = shell.outer, fits.wall
     lid_mid = (shell.split_z + shell.interior.hi[2]) / 2
     side_y = compute.orin_box.hi[1] + fits.clear + CONTROL_OFFSET_MM
@@ -29,6 +35,10 @@ def place_controls(rig: Rig, fits: Fits, shell: Shell, compute: Compute) -> dict
     bt = PanelPart.button(rig, part_of_kind(rig, "button"), w)
     out = {"power_switch": (sw, Pose.from_xyz_rpy_deg((o.lo[0], -side_y, lid_mid), (0, 0, 180.0))),
            "record_button": (bt, Pose.from_xyz_rpy_deg((o.lo[0], side_y, lid_mid), (0, 0, 180.0)))}
+    if handles is not None and "left" in handles.poses:
+        front_pad = max((p for p in handles.pads if p.lo[1] >= o.hi[1] - w), key=lambda p: p.hi[0])
+        x = front_pad.lo[0] - bt.size[1] / 2 - BUTTON_PAD_GAP_MM
+        out["record_button"] = (bt, Pose.from_xyz_rpy_deg((x, o.hi[1], handles.poses["left"].t[2]), (0, 0, 90.0)))
     ant = PanelPart.antenna(rig, part_of_kind(rig, "antenna"), w)
     ax = o.lo[0] + max(sw.size[0], bt.size[0]) + w + fits.clear + ant.size[1] / 2 + ANTENNA_GAP_MM
     for side, s in SIDES:

@@ -41,6 +41,7 @@ def test_printed_parts_exported_on_the_bed(asm, exported):
         step = exported / "printed" / f"{pid}.step"
         stl = exported / "printed" / f"{pid}.stl"
         assert step.read_bytes()[:13] == b"ISO-10303-21;" and stl.stat().st_size > 84
+        assert b'class="dim"' in (exported / "printed" / f"{pid}.drawing.svg").read_bytes()   # its drawing beside it
         shape = cq.importers.importStep(str(step)).val()
         bb = shape.BoundingBox()
         # OCC's box of a re-read STEP turned off its axes is up to ~0.01 mm loose: take its mesh's lowest point
@@ -91,7 +92,7 @@ def test_an_impossible_design_is_bad_input_in_every_command(tmp_path):
         assert r.returncode == 2, (args, r.stderr)
         lines = r.stderr.strip().splitlines()
         assert len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
-        assert "enclosure.handles.grip_length_mm: got 150 mm" in lines[0] and "expected 72.0 to 129.4 mm" in lines[0]
+        assert "enclosure.handles.grip_length_mm: got 150 mm" in lines[0] and "expected 64.0 to 137.4 mm" in lines[0]
     assert not report.exists() and not out.exists()
 
 
@@ -102,10 +103,10 @@ def test_suggested_grip_limits_really_pass_and_fail():
     from cad.layout import design_problems
     def problems(length):
         return design_problems(load_rig(overrides=[f"enclosure.handles.grip_length_mm={length}"]))
-    assert problems(72.0) == [] and problems(129.4) == []
-    for bad in (71.9, 129.5, 300):
+    assert problems(64.0) == [] and problems(137.4) == []
+    for bad in (63.9, 137.5, 300):
         [p] = problems(bad)
-        assert p.key == "enclosure.handles.grip_length_mm" and "expected 72.0 to 129.4 mm" in p.message
+        assert p.key == "enclosure.handles.grip_length_mm" and "expected 64.0 to 137.4 mm" in p.message
 
 
 @pytest.mark.slow
