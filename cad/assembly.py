@@ -101,6 +101,8 @@ def build(rig: Rig, cache: ShapeCache | None = None) -> Assembly:
         n = add(f"boson_{side}", lay.cameras.core.part_id, "bought", "cameras", lay.cameras.core, t.pose, lay.cameras.core.colour)
         n.optical = {f"thermal_{side}_optical": lay.cameras.core.optical_frames()["optical"]}
         add(f"boson_lens_{side}", lay.cameras.lens.part_id, "bought", "cameras", lay.cameras.lens, t.pose, lay.cameras.lens.colour)
+        add(f"sync_breakout_{side}", lay.power.breakout.part_id, "bought", "cameras", lay.power.breakout,
+            lay.power.breakout_poses[side], lay.power.breakout.colour)
         add(f"heat_sink_{side}", hs.part_id, "machined", "cooling", hs, t.pose, COPPER,
             material=rig.desc.enclosure.heat_sink.material)
         add(f"fan_{side}", lay.cooling.part.part_id, "bought", "cooling", lay.cooling.part, lay.cooling.fans[side].pose,
@@ -118,6 +120,9 @@ def build(rig: Rig, cache: ShapeCache | None = None) -> Assembly:
     # power
     add("dc_converter", lay.power.converter.part_id, "bought", "power", lay.power.converter, lay.power.converter_pose, lay.power.converter.colour)
     add("blade_fuse", lay.power.fuse.part_id, "bought", "power", lay.power.fuse, lay.power.fuse_pose, lay.power.fuse.colour)
+    add("cable_gland", lay.power.gland.part_id, "bought", "power", lay.power.gland, lay.power.gland_pose, lay.power.gland.colour)
+    add("undervoltage_cutoff", lay.power.cutoff.part_id, "bought", "power", lay.power.cutoff, lay.power.cutoff_pose,
+        lay.power.cutoff.colour)
     add("battery_mount", "battery_mount", "printed", "power", power_mounts.battery_mount(lay))
     add("makita_adapter", lay.power.adapter.part_id, "bought", "power", lay.power.adapter, lay.power.adapter_pose, lay.power.adapter.colour)
     add("makita_battery", lay.power.battery.part_id, "bought", "power", lay.power.battery, lay.power.battery_pose, lay.power.battery.colour)

@@ -137,5 +137,34 @@ def led_check(rig) -> Result:
                                             f"{GPIO_V:g} V GPIO")
 
 
+def cutoff_check(rig, counts: Mapping[str, int]) -> Result:
+    """The under-voltage cut-off: switching the fused current at up to the pack's full voltage, and
+    powered across the pack's whole range down to the cut-off it must act at."""
+    b = budget(rig, counts)
+    pid = part_of_kind(rig, "cutoff")
+    part = rig.part(pid)
+    a, v, miss = _rated(part, pid, "cut-off")
+    if miss:
+        return Result("cut-off rating", False, miss)
+    rng = part.supply_v
+    ok = a >= b.fuse_a and v >= b.max_v and rng is not None and rng.min <= b.cutoff_v and b.max_v <= rng.max
+    span = f"{rng.min:g}-{rng.max:g} V" if rng is not None else "(supply_v not given)"
+    return Result("cut-off rating", ok, f"cut-off {pid} rated {a:g} A at {v:g} V DC, working {span}: "
+                  + ("covers" if ok else "does NOT cover") + f" the fuse's {b.fuse_a:g} A and the pack's "
+                  f"{b.cutoff_v:g}-{b.max_v:g} V")
+
+
+def gland_check(rig) -> Result:
+    """The cable gland's seal grips the battery lead, and its hole is no smaller than its thread."""
+    pid = part_of_kind(rig, "gland")
+    d = lambda k: rig.dim(pid, k)
+    cable, lo, hi = d("cable_diameter_mm"), d("clamp_min_mm"), d("clamp_max_mm")
+    hole, thread = d("hole_diameter_mm"), d("thread_diameter_mm")
+    ok = lo <= cable <= hi and hole >= thread
+    return Result("cable gland", ok, f"gland {pid} clamps {lo:g}-{hi:g} mm: the {cable:g} mm battery lead "
+                  f"(parts.{pid}.dims.cable_diameter_mm) {'is' if lo <= cable <= hi else 'is NOT'} gripped; hole "
+                  f"{hole:g} mm for its {thread:g} mm thread" + ("" if hole >= thread else " (too small)"))
+
+
 def electrical_checks(rig, counts: Mapping[str, int]) -> list[Result]:
-    return power_checks(rig, counts) + [sync_check(rig), led_check(rig)]
+    return power_checks(rig, counts) + [cutoff_check(rig, counts), gland_check(rig), sync_check(rig), led_check(rig)]

@@ -231,4 +231,8 @@ def place_joints(rig: Rig, c: Constants, fits: Fits, *, cameras: Cameras, coolin
         d = tuple(power.converter_pose.rotate(np.array([0.0, 0.0, 1.0])))
         head = tuple(np.asarray(p) - wall * np.asarray(d))
         j.tapped(f"converter_{k}", e.screw, case_thread, head, d, wall, ["case_lower"], conv.part_id, conv.mount_depth_mm)
+    # under-voltage cut-off: down through its board into inserts in the floor's bosses (cad/layout/power.py)
+    for k, pt in enumerate(power.cutoff.mount_points()):
+        p = power.cutoff_pose.apply(np.array(pt))
+        j.insert(f"cutoff_{k}", (p[0], p[1], p[2] + power.cutoff.board_mm), DOWN, power.cutoff.board_mm, [], "case_lower")
     return tuple(j.out)

@@ -1,22 +1,31 @@
-"""Power: the DC-DC converter on the right wall, the fuse on the floor beside the Orin, and the Makita
-battery under the case in its dock adapter, screwed through a printed mount plate to the floor.
-Rig frame, mm."""
+"""Power and sync: the DC-DC converter on the right wall, the fuse on the floor beside the Orin, the
+cable gland that brings the battery leads up through the floor just ahead of the fuse, the
+under-voltage cut-off board ahead of the gland on two bosses of the floor, the Makita battery under
+the case in its dock adapter (screwed through a printed mount plate to the floor), and the sync
+breakout board on each Boson's rear connector. Rig frame, mm."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+
+import numpy as np
 
 from platform_tools.rig import Rig
 from platform_tools.rig.frames import Pose
 
 from cad.bought.base import part_of_kind
-from cad.bought.electronics import BoxPart
+from cad.bought.electronics import BoardPart, BoxPart, SyncBreakout
+from cad.bought.gland import CableGland
 from cad.bought.makita_adapter import MakitaAdapter
 from cad.bought.makita_battery import MakitaBattery
 from cad.geom import Bounds, placed_bounds, pose_xyz
 
+from .cameras import Cameras
 from .case import Shell
 from .compute import Compute
 from .fits import Fits
+
+#: wall beside the cut-off bosses' inserts, beyond the printer's minimum wall, on each side
+CUTOFF_BOSS_WALL_EXTRA_MM = 1.0
 
 
 @dataclass(frozen=True)
@@ -30,15 +39,28 @@ class Power:
     battery: MakitaBattery
     battery_pose: Pose
     battery_mount: Bounds       # the plate between the case floor and the dock adapter
+    gland: CableGland
+    gland_pose: Pose            # z into the case, origin on the floor's outer face
+    cutoff: BoardPart
+    cutoff_pose: Pose
+    cutoff_bosses: tuple[tuple[float, float, float, float], ...]   # (x, y, diameter, height) on the floor
+    breakout: SyncBreakout
+    breakout_poses: dict[str, Pose]   # by side: on the Boson's rear face
+
+    @property
+    def gland_hole(self) -> tuple[tuple[float, float, float], float]:
+        """Where the gland's hole crosses the floor's outer face, and its diameter (the gland's table)."""
+        return tuple(self.gland_pose.t), self.gland.hole_d_mm
 
     @property
     def converter_box(self) -> Bounds:
         return placed_bounds(self.converter.bounds(), self.converter_pose)
 
 
-def place_power(rig: Rig, fits: Fits, shell: Shell, compute: Compute) -> Power:
+def place_power(rig: Rig, fits: Fits, shell: Shell, compute: Compute, cameras: Cameras) -> Power:
     """The converter standing on the right wall beside the Orin, the fuse beside it on the floor, the
-    battery dock centred under the Orin with the battery's rear end flush with the dock's."""
+    gland and the cut-off in the floor strip ahead of the fuse, the battery dock centred under the Orin
+    with the battery's rear end flush with the dock's, a breakout behind each Boson."""
     clear, floor_z = fits.clear, shell.interior.lo[2]
     orin_box, orin_x = compute.orin_box, compute.orin_pose.t[0]
     conv = BoxPart.from_rig(rig, part_of_kind(rig, "converter"))
@@ -54,5 +76,22 @@ def place_power(rig: Rig, fits: Fits, shell: Shell, compute: Compute) -> Power:
     mount = Bounds((orin_x - ax / 2, -ay / 2, floor_out - fits.insert_plate_mm), (orin_x + ax / 2, ay / 2, floor_out))
     adapter_pose = pose_xyz(orin_x, 0.0, mount.lo[2] - az)
     battery_pose = pose_xyz(orin_x + ax / 2 - battery.size[0] / 2, 0.0, adapter_pose.t[2])
+    # the floor strip between the Orin and the left wall, ahead of the fuse: the gland's locknut, then the cut-off
+    strip_y = (orin_box.hi[1] + clear + shell.interior.hi[1] - clear) / 2
+    gland = replace(CableGland.from_rig(rig, part_of_kind(rig, "gland")), wall_mm=fits.wall)
+    gx = fuse_pose.t[0] + fuse.size[0] / 2 + clear + gland.nut_d_mm / 2
+    gland_pose = pose_xyz(gx, strip_y, shell.outer.lo[2])
+    cutoff = BoardPart.from_rig(rig, part_of_kind(rig, "cutoff"))
+    boss_h = fits.insert_plate_mm
+    cut_x = gx + gland.nut_d_mm / 2 + clear + cutoff.size[0] / 2
+    cutoff_pose = pose_xyz(cut_x, strip_y, floor_z + boss_h)
+    boss_d = fits.insert.outer_diameter_mm + 2 * (fits.min_wall + CUTOFF_BOSS_WALL_EXTRA_MM)
+    bosses = tuple((float(p[0]), float(p[1]), boss_d, boss_h)
+                   for p in (cutoff_pose.apply(np.array(pt)) for pt in cutoff.mount_points()))
+    breakout = SyncBreakout.from_rig(rig, part_of_kind(rig, "interface_board"))
+    rear = cameras.core.bounds().lo[0]
+    breakouts = {side: t.pose @ pose_xyz(rear, 0.0, 0.0) for side, t in cameras.thermal.items()}
     return Power(converter=conv, converter_pose=conv_pose, fuse=fuse, fuse_pose=fuse_pose, adapter=adapter,
-                 adapter_pose=adapter_pose, battery=battery, battery_pose=battery_pose, battery_mount=mount)
+                 adapter_pose=adapter_pose, battery=battery, battery_pose=battery_pose, battery_mount=mount,
+                 gland=gland, gland_pose=gland_pose, cutoff=cutoff, cutoff_pose=cutoff_pose, cutoff_bosses=bosses,
+                 breakout=breakout, breakout_poses=breakouts)

@@ -55,7 +55,7 @@ def build_layout(rig: Rig, c: Constants) -> Layout:
     mounts = place_mounts(rig, c, fits, cameras, bar)
     compute = place_compute(rig, c, fits, cameras, mounts, plates)
     shell = place_shell(rig, fits, cameras, fans, compute, mounts.floor_z)
-    power = place_power(rig, fits, shell, compute)
+    power = place_power(rig, fits, shell, compute, cameras)
     lugs = place_lugs(rig, c, shell)
     case = Case(interior=shell.interior, outer=shell.outer, split_z=shell.split_z, lugs=lugs,
                 port_cutout=port_cutout(fits, shell, compute),
@@ -65,5 +65,5 @@ def build_layout(rig: Rig, c: Constants) -> Layout:
     joints = place_joints(rig, c, fits, cameras=cameras, cooling=cooling, mounts=mounts, compute=compute,
                           power=power, case=case, handles=handles)
     return Layout(rig=rig, c=c, fits=fits, cameras=cameras, cooling=cooling, mounts=mounts, compute=compute,
-                  case=case, power=power, handles=handles, controls=place_controls(rig, fits, shell, compute),
+                  case=case, power=power, handles=handles, controls=place_controls(rig, fits, shell, compute, handles),
                   joints=joints)

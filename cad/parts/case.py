@@ -16,8 +16,13 @@ import cadquery as cq
 import numpy as np
 
 from ..layout import Hole, Layout, fov_half_angles_deg
+from ..layout.constants import HOLE_LEAD_MM
 from ..geom import Bounds, box, cylinder, moved
 from .common import PrintSetup, hole_tools
+
+
+#: a boss on the floor starts this far inside the floor, so the two fuse into one solid
+BOSS_FUSE_MM = 0.5
 
 
 @dataclass(frozen=True)
@@ -41,6 +46,7 @@ class CaseSpec:
     lid_lug_mm: float
     lugs: tuple[tuple[float, float], ...]
     pads: tuple[Bounds, ...]
+    bosses: tuple[tuple[float, float, float, float, float], ...]   # (x, y, z0, diameter, height): on the floor
     boxes: tuple[Bounds, ...]                      # box cut-outs (windows, notches, vents)
     cones: tuple[ConeCut, ...]                     # camera windows
     panel_cuts: tuple[tuple[object, tuple], ...]   # (PanelPart, pose matrix rows)
@@ -58,6 +64,7 @@ class CaseSpec:
         shell = outer.val().cut(inner.val())
         adds = [self._lug(x, s, lower) for x, s in self.lugs for lower in (True, False)]
         adds += [box(p) for p in self.pads]
+        adds += [cylinder(d, h + BOSS_FUSE_MM, (x, y, z0 - BOSS_FUSE_MM)) for x, y, z0, d, h in self.bosses]
         shell = shell.fuse(*adds).clean()
         return shell.cut(*self._cutters()).clean()
 
@@ -128,9 +135,14 @@ def case_spec(lay: Layout) -> CaseSpec:
         cones.append(ConeCut(apex, axis, half, length, lay.cameras.lens.diameter_mm + 2 * lay.fits.clear))
     panel = tuple((part, tuple(map(tuple, pose.matrix()))) for part, pose in lay.controls.values())
     holes = lay.holes_for("case_lower") + lay.holes_for("case_lid")
+    # the cable gland's hole through the floor, the gland table's diameter
+    (gx, gy, gz), gd = lay.power.gland_hole
+    holes += (Hole("case_lower", (gx, gy, gz - HOLE_LEAD_MM), (0.0, 0.0, 1.0), gd, lay.fits.wall + 2 * HOLE_LEAD_MM),)
+    floor = lay.case.interior.lo[2]
+    bosses = tuple((x, y, floor, d, h) for x, y, d, h in lay.power.cutoff_bosses)
     return CaseSpec(lay.case.outer, lay.fits.wall, lay.rig.desc.enclosure.corner_radius_mm, lay.case.split_z, c.lug_width_mm,
                     c.lug_protrusion_mm, lay.fits.insert_plate_mm, c.lid_lug_mm, tuple(lay.case.lugs),
-                    tuple(lay.handles.pads), tuple(boxes), tuple(cones), panel, holes)
+                    tuple(lay.handles.pads), bosses, tuple(boxes), tuple(cones), panel, holes)
 
 
 PRINT = {
