@@ -95,6 +95,7 @@ class Bom:
     lines: list[Line]
     made: list[PrintedPart]
     printer: dict
+    cables: list[dict] = field(default_factory=list)   # per cable route: cad.cables.cable_lengths
 
     def by_category(self) -> list[tuple[str, list[Line], float, float]]:
         out = []
@@ -135,8 +136,10 @@ class Bom:
 def build_bom(asm, cat: LoadedCatalogue) -> Bom:
     """The bill of ``asm`` (a :class:`cad.assembly.Assembly`) joined with the catalogue ``cat``.
     Raises :class:`BomError` when the two do not join."""
+    from cad.cables import cable_lengths
     buckets, made_nodes = _walk(asm)
-    problems = _join_problems(cat, buckets, made_nodes)
+    cables = cable_lengths(asm)
+    problems = _join_problems(cat, buckets, made_nodes) + _cable_problems(cat, cables)
     if problems:
         raise BomError(problems)
     rig = asm.rig
@@ -146,14 +149,15 @@ def build_bom(asm, cat: LoadedCatalogue) -> Bom:
     lines = [_placed_line(rig, cat, key, nodes, made) for key, nodes in buckets.items()]
     lines += [_printed_line(mp, filament[0], printer.density_g_cm3) for mp in made if mp.category == "printed"]
     printed_mass = sum(mp.total_mass_g for mp in made if mp.category == "printed")
-    lines += [_supply_line(cat, pid, e, printed_mass) for pid, e in cat.entries.items() if not e.in_cad]
+    lines += [_supply_line(cat, pid, e, printed_mass, cables) for pid, e in cat.entries.items() if not e.in_cad]
     order = {c: i for i, c in enumerate(CATEGORY_ORDER)}
     # stable: assembly order within a category; fasteners by part, then thread and length
     lines.sort(key=lambda ln: (order.get(ln.category, 99), ln.entry_id if ln.category == "fasteners" else "",
                                ln.length_mm or 0.0))
     return Bom(rig_name=rig.desc.name, rig_hash=rig.hash, overrides=tuple(rig.overrides),
                currency=cat.catalogue.base_currency, catalogue_path=str(cat.path),
-               rates_checked=cat.catalogue.rates_checked, lines=lines, made=made, printer=_printer_summary(printer))
+               rates_checked=cat.catalogue.rates_checked, lines=lines, made=made, printer=_printer_summary(printer),
+               cables=cables)
 
 
 def _walk(asm) -> tuple[dict[str, list], dict[str, list]]:
@@ -210,6 +214,25 @@ def _join_problems(cat: LoadedCatalogue, buckets: dict[str, list], made_nodes: d
         elif not e.made and buckets.get(pid, [None])[0] is not None and buckets[pid][0].category == "machined":
             problems.append(f"{cat.where(pid)}: parts.{pid}: is machined from the CAD model; add made: machined")
     return problems
+
+
+def _cable_problems(cat: LoadedCatalogue, cables: list[dict]) -> list[str]:
+    """Every cable route bought as a catalogue entry that is not there, and every entry counted from the
+    routes that no route uses."""
+    out = []
+    for c in cables:
+        if c["catalogue"] is not None and c["catalogue"] not in cat.entries:
+            out.append(f"{cat.path}: parts.{c['catalogue']}: missing: cable route {c['route']} (cad/cables.py) is "
+                       "bought as it")
+        if c["bought_mm"] is None:
+            out.append(f"cad/bought/cables.yaml: kinds.{c['kind']}: no stock length holds cable route {c['route']} "
+                       f"({c['route_mm']:g} mm + {c['slack_mm']:g} mm slack)")
+    used = {c["catalogue"] for c in cables}
+    for pid, e in cat.entries.items():
+        if e.supply is not None and e.supply.quantity_from == "cable_routes" and pid not in used:
+            out.append(f"{cat.where(pid)}: parts.{pid}: quantity_from: cable_routes, but no cable route of the CAD "
+                       "model is bought as it")
+    return out
 
 
 def _made_parts(asm, made_nodes: dict[str, list]) -> list[PrintedPart]:
@@ -298,12 +321,20 @@ def _printed_line(mp: PrintedPart, filament_id: str, density_g_cm3: float) -> Li
                 mass_source=f"CAD volume x {density_g_cm3:g} g/cm3", source="CAD assembly", nodes=mp.nodes)
 
 
-def _supply_line(cat: LoadedCatalogue, pid: str, e: CatalogueEntry, printed_mass_g: float) -> Line:
-    """A catalogue entry the CAD does not place: the filament (from the printed parts' mass plus waste)
-    or a fixed supply."""
+def _supply_line(cat: LoadedCatalogue, pid: str, e: CatalogueEntry, printed_mass_g: float,
+                 cables: list[dict] = ()) -> Line:
+    """A catalogue entry the CAD does not place: the filament (from the printed parts' mass plus waste),
+    cables (one per route of the model, at the stock length the longest route needs) or a fixed supply."""
     s = e.supply
     pack_price, note = _price(cat, e)
-    if s.quantity_from == "printed_parts":
+    number = s.part_number
+    if s.quantity_from == "cable_routes":
+        mine = [c for c in cables if c["catalogue"] == pid]
+        qty_shown = len(mine)
+        length = max((c["bought_mm"] or 0.0) for c in mine) if mine else 0.0
+        number = s.part_number.format(length_mm=f"{length:g}")
+        unit_mass, mass, src, msrc = s.mass_g, s.mass_g * qty_shown, "cable routes", "catalogue"
+    elif s.quantity_from == "printed_parts":
         qty = printed_mass_g * (1 + s.waste_percent / 100)
         qty = qty / 1000 if s.unit == "kg" else qty
         unit_mass, mass, src, msrc = None, 0.0, "printed volumes", "counted on the printed parts' lines"
@@ -313,7 +344,7 @@ def _supply_line(cat: LoadedCatalogue, pid: str, e: CatalogueEntry, printed_mass
         unit_mass, mass, src, msrc = s.mass_g, s.mass_g * s.quantity, "catalogue", "catalogue"
     packs = math.ceil(qty_shown / e.pack_size - 1e-9)
     return Line(key=pid, entry_id=pid, category=e.category.value, name=s.description, vendor=s.vendor,
-                part_number=s.part_number, supplier=e.supplier, link=e.link, quantity=qty_shown, unit=s.unit,
+                part_number=number, supplier=e.supplier, link=e.link, quantity=qty_shown, unit=s.unit,
                 pack_size=e.pack_size, packs=packs, pack_price=pack_price, price_note=note, cost=packs * pack_price,
                 unit_mass_g=unit_mass, mass_g=mass, mass_source=msrc, source=src, nodes=[],
                 estimate=e.price is not None and e.price.confidence.value == "estimate")

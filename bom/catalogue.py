@@ -134,6 +134,14 @@ def _supply_rules(e: CatalogueEntry, path: tuple, rig: Rig) -> Iterator[Problem]
     if s.quantity is not None:
         yield Problem(sp + ("quantity",), f"is {s.quantity:g}, but quantity_from: {s.quantity_from} computes it; "
                                           "remove one of them")
+    if s.quantity_from == "cable_routes":
+        if s.mass_g is None:
+            yield Problem(sp + ("mass_g",), "is missing; give the mass of one cable")
+        if s.unit != "pcs":
+            yield Problem(sp + ("unit",), f"is {s.unit}; cables counted from the routes are bought by the piece (pcs)")
+        if s.waste_percent:
+            yield Problem(sp + ("waste_percent",), "does not apply to cables counted from the routes")
+        return
     if s.mass_g is not None:
         yield Problem(sp + ("mass_g",), "is counted on the printed parts' lines (CAD volume x density); remove it")
     if s.unit not in ("g", "kg"):

@@ -77,8 +77,10 @@ class Supply:
     mass_g: Optional[Annotated[float, Ge(0)]] = None
     #: per rig; omitted when quantity_from says where the BOM computes it from
     quantity: Optional[Annotated[float, Gt(0)]] = None
-    #: printed_parts: the sum of the printed parts' masses from their CAD volumes (unit g or kg)
-    quantity_from: Optional[Literal["printed_parts"]] = None
+    #: printed_parts: the sum of the printed parts' masses from their CAD volumes (unit g or kg);
+    #: cable_routes: one piece per cable route of the CAD model bought as this entry (cad/cables.py), its
+    #: stock length written into the part number's ``{length_mm}``
+    quantity_from: Optional[Literal["printed_parts", "cable_routes"]] = None
     #: extra on a computed quantity (purge, brims, a failed print)
     waste_percent: Annotated[float, Ge(0)] = 0.0
 

@@ -25,6 +25,7 @@ from cad.bought.fasteners import fastener_table
 
 CONTACT_MM3 = 0.01       # an overlap below this is a touch, not a clash
 TOL_REL, TOL_ABS = 0.05, 0.5
+DATUM_CONTACT_MM = 0.02  # a datum contact further than this from its part's surface is not in the geometry
 
 
 @dataclass
@@ -405,8 +406,105 @@ def check_electrical(asm: Assembly) -> CheckResult:
                        if not bad else f"{len(bad)} electrical problem(s)", bad + [f"{r.name}: {r.text}" for r in res if r.ok])
 
 
+def check_power_parts(asm: Assembly, extra=()) -> CheckResult:
+    """The gland's hole and locknut socket path, the breakouts' plug room, the cut-off on its bosses
+    (cad/passthrough.py)."""
+    from .passthrough import power_part_problems
+    bad, details, data = power_part_problems(asm, list(extra))
+    return CheckResult("power and sync parts", not bad, "gland hole as its table, locknut and plugs reachable"
+                       if not bad else f"{len(bad)} problem(s) fitting the gland, cut-off or breakouts",
+                       bad + details, data)
+
+
+def check_datums(asm: Assembly, locations=None) -> CheckResult:
+    """Every camera located by named features (cad/datums.py): each location of its chain removes all six
+    degrees of freedom, each feature exactly the ones it claims, and every contact lies on the built
+    geometry of the part that carries it (and of the part it locates, for a face both touch)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
+    from OCP.gp import gp_Pnt
+    from .datums import camera_locations, contact_gaps, datum_problems
+    from .tolerances import stack_up
+    locations = camera_locations(asm.layout) if locations is None else locations
+    bad, details = datum_problems(locations)
+
+    def gap(node: str, p) -> float:
+        v = cq.Shape.cast(BRepBuilderAPI_MakeVertex(gp_Pnt(*p)).Vertex())
+        return distance(asm.node(node).shape(asm.cache), v)
+    for cam, feature, node, g in contact_gaps(locations, gap):
+        if g > DATUM_CONTACT_MM:
+            bad.append(f"{cam}: {feature}: its contact is {g:.2f} mm off {node}: the feature is not in the geometry")
+    data = {}
+    for cam in locations:
+        u = stack_up(locations, cam, "zed_x" if cam != "zed_x" else None)
+        data[cam] = u.as_dict()
+        details.append(f"{cam} ({'relative to the ZED X' if cam != 'zed_x' else 'in the case'}): worst case "
+                       + ", ".join(f"{n} {v:.2f}" for n, v in zip(("x", "y", "z"), u.worst[:3])) + " mm, "
+                       + ", ".join(f"{n} {v:.2f}" for n, v in zip(("roll", "pitch", "yaw"), u.worst[3:])) + " deg; 1 sigma "
+                       + " / ".join(f"{v:.2f}" for v in u.sigma) + " (mm, deg)")
+    n = sum(len(f.contacts) for chain in locations.values() for loc in chain for f in loc.features)
+    return CheckResult("camera datums", not bad, f"{len(locations)} cameras, {sum(len(c) for c in locations.values())} "
+                       f"locations, {n} contacts: each held in 6 DOF by named features on the geometry"
+                       if not bad else f"{len(bad)} datum problem(s)", bad + details, data)
+
+
+def check_cables(asm: Assembly, extra_routes=(), only=None) -> CheckResult:
+    """The key cables swept along their routes: bend radius, interference, length (cad/cables.py)."""
+    from .cables import cable_report
+    r = cable_report(asm, list(extra_routes), only)
+    return CheckResult("cables", not r.problems, f"{len(r.paths)} cables routed, bends and paths clear"
+                       if not r.problems else f"{len(r.problems)} cable problem(s)", r.problems + r.details,
+                       dict(lengths={p.route.name: round(p.length_mm, 1) for p in r.paths}))
+
+
+def check_grip_span(asm: Assembly) -> CheckResult:
+    """The clear span between each handle's posts (cad/ergonomics.py) against the rig's ergonomic minimum."""
+    from .ergonomics import clear_span_mm
+    need = asm.rig.desc.enclosure.ergonomics.min_clear_span_mm
+    span = clear_span_mm(asm.layout)
+    ok = span >= need - 1e-9
+    return CheckResult("grip span", ok, f"{span:.0f} mm clear between the posts of {len(asm.layout.handles.poses)} "
+                       f"handles (at least {need:g})", [] if ok else [
+                           f"enclosure.handles.grip_length_mm: {span:.0f} mm clear between the posts, under "
+                           f"{need:g} mm (enclosure.ergonomics.min_clear_span_mm): a hand does not fit"], dict(span_mm=span))
+
+
+def check_stands(asm: Assembly, extra_masses=()) -> CheckResult:
+    """Set down on a table (cad/ergonomics.py): it stands tilted ``min_tilt_deg`` every way and not on a
+    camera; ``extra_masses``: (name, grams, rig point) added to the parts' (tests)."""
+    from .ergonomics import stability
+    mp = mass_properties(asm)
+    m = mp["mass_g"] + sum(g for _, g, _ in extra_masses)
+    com = (np.array(mp["com_mm"]) * mp["mass_g"] + sum((g * np.asarray(p, float) for _, g, p in extra_masses),
+                                                       np.zeros(3))) / m
+    shapes = {n.name: n.shape(asm.cache) for n in asm.nodes}
+    zmin = min(bounds_of(s).lo[2] for s in shapes.values())
+    bottoms = {}
+    for name, s in shapes.items():
+        if bounds_of(s).lo[2] <= zmin + 1.0:      # only the lowest parts can touch the table
+            bottoms[name] = np.array([v.toTuple() for v in s.tessellate(0.05, 0.2)[0]])
+    ok, lines, data = stability(bottoms, com, asm.rig.desc.enclosure.ergonomics.min_tilt_deg)
+    return CheckResult("stands on a table", ok, lines[-2] if ok else lines[0], lines, dict(data, com_mm=com.tolist()))
+
+
+def check_button_reach(asm: Assembly, button: str = "record_button") -> CheckResult:
+    """The record button's actuator within a thumb's reach of a grip's surface (cad/ergonomics.py)."""
+    from .ergonomics import distance_to_grip_mm, grips
+    n = asm.node(button)
+    tip = n.pose.apply(np.array([n.spec.stick_out_mm, 0.0, 0.0]))
+    reach = asm.rig.desc.enclosure.ergonomics.thumb_reach_mm
+    d = {g.name: distance_to_grip_mm(tip, g) for g in grips(asm.layout)}
+    best = min(d, key=d.get) if d else None
+    ok = best is not None and d[best] <= reach
+    lines = [f"{g}: {v:.1f} mm from the {button}" for g, v in d.items()]
+    return CheckResult("record button reach", ok, f"{d[best]:.0f} mm from {best} (a thumb reaches {reach:g} mm)" if best
+                       else "no handle", lines if ok else [f"the {button} is {d[best]:.0f} mm from the nearest grip "
+                                                           f"({best}); a thumb reaches {reach:g} mm "
+                                                           f"(enclosure.ergonomics.thumb_reach_mm)"] + lines, d)
+
+
 CHECKS = [check_valid, check_interference, check_min_wall, check_clearances, check_bed, check_printable, check_fov,
-          check_battery, check_vents, check_assembly_order, check_mass, check_electrical, check_estimates]
+          check_battery, check_vents, check_assembly_order, check_datums, check_mass, check_grip_span, check_stands, check_button_reach, check_electrical, check_power_parts,
+          check_cables, check_estimates]
 
 
 def run_checks(asm: Assembly) -> list[CheckResult]:

@@ -130,7 +130,9 @@ def register(sub) -> None:
     c = sub.add_parser("check", help="check the assembly; exit 1 with a report if anything fails",
                        description="Valid solids, interference (intended overlaps measured), minimum wall, heat sink "
                                    "/ fan / wall clearances, print bed, fields of view, battery removal, vent area, "
-                                   "mass and balance, and the list of estimates.",
+                                   "camera datums (each camera held in 6 DOF by named features, with its tolerance "
+                                   "stack-up), mass and balance, grip span, standing on a table, record button reach, "
+                                   "and the list of estimates.",
                        epilog="Exit codes: 0 every check passed; 1 a check failed (the report says which); 2 bad "
                               "input (a bad --set or an impossible design: one line per rig key, with its limit).")
     c.add_argument("--report", type=Path, help="also write the report to this file")

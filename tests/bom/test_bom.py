@@ -141,7 +141,41 @@ def test_power_and_sync_lines(bom_default):
     rows = read_bom(bom_default)
     lens = rows["boson_lens_4p9mm"]
     assert float(lens["cost"]) == 0 and "fitted to boson_640" in lens["price_note"]
-    for key in ("makita_charger", "undervoltage_cutoff", "cable_gland", "wifi_pigtail", "fuse_holder_fixings",
-                "capture_card_fixings", "power_splices", "boson_sync_breakout"):
+    for key in ("makita_charger", "wifi_pigtail", "fuse_holder_fixings", "capture_card_fixings", "power_splices"):
         assert float(rows[key]["quantity"]) > 0, key
+    # the gland, the cut-off and the breakouts are counted from the CAD model, one breakout per Boson
+    for key in ("undervoltage_cutoff", "cable_gland", "boson_sync_breakout"):
+        assert rows[key]["source"] == "CAD assembly", key
+    assert float(rows["cable_gland"]["quantity"]) == 1 and float(rows["undervoltage_cutoff"]["quantity"]) == 1
+    assert float(rows["boson_sync_breakout"]["quantity"]) == float(rows["boson_640"]["quantity"]) == 2
     assert float(rows["wifi_pigtail"]["quantity"]) == float(rows["wifi_antenna"]["quantity"])
+
+
+def test_cables_bought_at_the_length_their_route_needs(bom_default):
+    """The GMSL2 cable and the pigtails are counted from the routes of cad/cables.py, at the stock length the
+    route plus its slack needs; the cables table of bom.html gives each route's length."""
+    import re
+    from cad.bought.cables import cable_table
+    rows = read_bom(bom_default)
+    html = (bom_default / "bom.html").read_text()
+    routes = {m[0]: (float(m[1]), float(m[2])) for m in
+              re.findall(r'id="cable-([a-z0-9-]+)" data-route-mm="([0-9.]+)" data-bought-mm="([0-9.]+)"', html)}
+    assert {"gmsl2", "pigtail-left", "pigtail-right", "sync-left", "sync-right"} <= set(routes), routes
+    k = cable_table().kinds["gmsl2_coax"]
+    route, bought = routes["gmsl2"]
+    assert bought == min(s for s in k.stock_lengths_mm if s >= route + k.service_slack_mm)
+    g = rows["gmsl2_cable"]
+    assert g["source"] == "cable routes" and float(g["quantity"]) == 1 and f"{bought:g} mm" in g["part_number"]
+    p = rows["wifi_pigtail"]
+    assert p["source"] == "cable routes" and f"{routes['pigtail-left'][1]:g} mm" in p["part_number"]
+
+
+def test_cable_routes_supply_with_a_quantity_is_refused(tmp_path, capsys):
+    text = CATALOGUE.read_text().replace("      quantity_from: cable_routes   # the route of cad/cables.py",
+                                         "      quantity: 1\n      quantity_from: cable_routes   # the route of cad/cables.py")
+    bad = tmp_path / "parts.yaml"
+    bad.write_text(text)
+    code = build_main(["bom", "--catalogue", str(bad), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and "parts.gmsl2_cable.supply.quantity: is 1, but quantity_from: cable_routes computes it" in err, err
+    assert not (tmp_path / "out").exists()

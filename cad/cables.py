@@ -1,0 +1,271 @@
+"""The rig's key cables as swept paths: each route is a polyline of waypoints from the connector it
+leaves to the connector it plugs into, laid with circular bends of its radius, swept with its cable's
+diameter (``cad/bought/cables.yaml``), and checked:
+
+- **bend radius**: every bend at least the cable's minimum (``bend_factor`` x diameter), and every bend
+  fits between its neighbours: the tangent lengths ``R tan(theta / 2)`` of the two bends at a segment's
+  ends (or a plug's straight length and one bend, at an end) must fit in the segment; otherwise the
+  cable really bends tighter than the route says, and the report gives the largest radius that fits;
+- **interference**: the swept cable intersected with every part of the assembly (the parts it plugs
+  into too: a cable ends on its connector's face, it does not enter the part); anything above the
+  interference check's 0.01 mm^3 is a clash, so a cable through a wall fails unless its path goes
+  through an opening;
+- **length**: path length (straights plus arcs ``R theta``) plus the kind's service slack, rounded up
+  to the kind's next stock length (or to 10 mm for a kind cut from a reel); what the BOM buys.
+
+Where the connectors are on the bought parts is an estimate wherever the rig gives no mounting face
+for them (named below); the waypoints are computed from the layout, so they follow the parts.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cadquery as cq
+import numpy as np
+
+from cad.bought.cables import CableKind, cable_table
+from cad.geom import Vec3, bounds_of, placed_bounds
+
+from .assembly import Assembly
+
+#: an overlap below this is a touch (the interference check's threshold)
+CONTACT_MM3 = 0.01
+#: a turn under this (deg) is a straight run: no bend
+STRAIGHT_DEG = 0.5
+#: the capture card's connectors on its front face (+x), across it (y, from its centre): the GMSL2 socket
+#: the ZED X uses and the trigger connector (J17). Estimates: the card is an envelope in the rig.
+CARD_GMSL2_Y_MM, CARD_SYNC_Y_MM = 0.0, 15.0
+#: the Orin devkit's 40-pin header, on its front face (+x): across (y, from the centre, towards the fan's
+#: side) and up from the devkit's bottom (z). Estimate: measure a devkit.
+ORIN_HEADER_Y_MM, ORIN_HEADER_Z_MM = 45.0, 42.0
+#: the Wi-Fi card's antenna sockets, reached through the devkit's side (towards each antenna), this far up
+#: from its bottom and at the antenna's x. Estimate.
+ORIN_WIFI_Z_MM = 60.0
+#: a fan's lead leaves its top face at its centre; it first rises this far above the fan's top
+FAN_LEAD_RISE_MM = 12.0
+#: the sync branches run along under the ZED's shelf at the breakout's height, from this far behind the ZED
+SYNC_RUN_BEHIND_ZED_MM = 18.0
+
+
+@dataclass(frozen=True)
+class Route:
+    """One cable: ``points`` (rig frame, mm) from the connector it leaves to the one it plugs into."""
+    name: str
+    kind: str                  # a kind of the cable table
+    catalogue: str | None      # the BOM entry it is bought as (None: part of a bought part's own lead)
+    ends: tuple[str, str]      # the nodes it plugs into
+    points: tuple[Vec3, ...]
+    radius_mm: float           # the radius every bend is laid with
+    plugs: tuple[bool, bool] = (True, True)   # a connector at each end (False: the part's own lead leaves it)
+
+
+@dataclass(frozen=True)
+class Bend:
+    corner: int                # index of the waypoint
+    angle_deg: float
+    radius_mm: float
+    tangent_mm: float
+
+
+@dataclass(frozen=True)
+class Path:
+    """A route's geometry: its bends, its length and the problems of its bends."""
+    route: Route
+    kind: CableKind
+    bends: tuple[Bend, ...]
+    length_mm: float
+    problems: tuple[str, ...]
+
+    @property
+    def bought_mm(self) -> float | None:
+        return self.kind.bought_length_mm(self.length_mm)
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
+
+
+def path_of(route: Route, kind: CableKind) -> Path:
+    """The bends of ``route`` at its radius, its length, and every way its bends break the cable's rules."""
+    p = np.asarray(route.points, dtype=float)
+    seg = np.diff(p, axis=0)
+    lens = np.linalg.norm(seg, axis=1)
+    if np.any(lens < 1e-6):
+        raise ValueError(f"cable {route.name}: two waypoints coincide")
+    d = seg / lens[:, None]
+    R, need = route.radius_mm, kind.min_bend_radius_mm
+    bends, problems = [], []
+    tan_at = np.zeros(len(p))
+    for i in range(1, len(p) - 1):
+        theta = math.acos(float(np.clip(d[i - 1] @ d[i], -1.0, 1.0)))
+        if math.degrees(theta) < STRAIGHT_DEG:
+            continue
+        tan_at[i] = R * math.tan(theta / 2)
+        bends.append(Bend(i, math.degrees(theta), R, tan_at[i]))
+    if R < need - 1e-9:
+        problems.append(f"cable {route.name}: laid with {R:g} mm bends; a {kind.description} needs at least "
+                        f"{need:g} mm ({kind.bend_factor:g} x {kind.diameter_mm:g} mm, {kind.source})")
+    for s in range(len(seg)):
+        used = tan_at[s] + tan_at[s + 1] + (kind.plug_mm if s == 0 and route.plugs[0] else 0.0) \
+            + (kind.plug_mm if s == len(seg) - 1 and route.plugs[1] else 0.0)
+        if used > lens[s] + 1e-6:
+            # the largest radius the segment's bends fit in: scale the bends' share of the segment
+            plugs = used - tan_at[s] - tan_at[s + 1]
+            k = max(lens[s] - plugs, 0.0) / (tan_at[s] + tan_at[s + 1]) if tan_at[s] + tan_at[s + 1] > 0 else 0.0
+            what = "its plug and bend" if s in (0, len(seg) - 1) else "the bends at both ends"
+            problems.append(f"cable {route.name}: segment {s + 1} ({lens[s]:.1f} mm, waypoints {s}-{s + 1}) is too "
+                            f"short for {what} ({used:.1f} mm): the cable bends to about {k * R:.1f} mm there, "
+                            f"under the {need:g} mm it needs")
+    length = float(lens.sum() - 2 * tan_at.sum()) + sum(b.radius_mm * math.radians(b.angle_deg) for b in bends)
+    return Path(route, kind, tuple(bends), length, tuple(problems))
+
+
+def centreline(route: Route) -> cq.Wire:
+    """The route's centre line: straights and circular arcs of its radius, tangent to each other."""
+    p = np.asarray(route.points, dtype=float)
+    R = route.radius_mm
+    edges, cur = [], p[0]
+    for i in range(1, len(p) - 1):
+        a, b = _unit(p[i] - p[i - 1]), _unit(p[i + 1] - p[i])
+        theta = math.acos(float(np.clip(a @ b, -1.0, 1.0)))
+        if math.degrees(theta) < STRAIGHT_DEG:
+            continue
+        t = R * math.tan(theta / 2)
+        t0, t1 = p[i] - a * t, p[i] + b * t
+        centre = t0 + R * _unit(b - a * (a @ b))          # the arc's centre, R from t0 towards the turn
+        mid = centre + R * _unit(p[i] - centre)
+        if np.linalg.norm(t0 - cur) > 1e-6:
+            edges.append(cq.Edge.makeLine(cq.Vector(*cur), cq.Vector(*t0)))
+        edges.append(cq.Edge.makeThreePointArc(cq.Vector(*t0), cq.Vector(*mid), cq.Vector(*t1)))
+        cur = t1
+    edges.append(cq.Edge.makeLine(cq.Vector(*cur), cq.Vector(*p[-1])))
+    return cq.Wire.assembleEdges(edges)
+
+
+def sweep(route: Route, kind: CableKind) -> cq.Shape:
+    """The cable as a solid: a circle of its diameter swept along the centre line."""
+    p = np.asarray(route.points, dtype=float)
+    path = centreline(route)
+    d0 = _unit(p[1] - p[0])
+    circle = cq.Wire.makeCircle(kind.diameter_mm / 2, cq.Vector(*p[0]), cq.Vector(*d0))
+    return cq.Solid.sweep(circle, [], path, True, False, None, "round")
+
+
+# ----------------------------------------------------------------------------- the routes
+def routes(asm: Assembly) -> list[Route]:
+    """The key cables of the rig, their waypoints computed from the layout."""
+    lay = asm.layout
+    table = cable_table().kinds
+    R = lambda kind: table[kind].min_bend_radius_mm
+    zed, card, orin = lay.cameras.zed_box, lay.compute.card_box, lay.compute.orin_box
+    out = []
+    # GMSL2: out of the ZED X's rear (its centre) backwards, an S-bend up to the card's front socket
+    k = table["gmsl2_coax"]
+    a = np.array([zed.lo[0], CARD_GMSL2_Y_MM, zed.centre[2]])
+    b = np.array([card.hi[0], CARD_GMSL2_Y_MM, card.centre[2]])
+    p1, p2 = _s_bend(a, b, k.plug_mm, R("gmsl2_coax"))
+    out.append(Route("gmsl2", "gmsl2_coax", "gmsl2_cable", ("zed_x", "zed_link_quad"), (tuple(a), p1, p2, tuple(b)),
+                     R("gmsl2_coax")))
+    # sync harness: from the card's trigger connector forwards, down beside the Orin and along to each
+    # breakout's header, plugged in from behind
+    ks = table["sync_pair"]
+    start = np.array([card.hi[0], CARD_SYNC_Y_MM, card.centre[2]])
+    for side, pose in lay.power.breakout_poses.items():
+        hdr = pose.apply(np.array(lay.power.breakout.sync_header()))
+        run_x = zed.lo[0] - SYNC_RUN_BEHIND_ZED_MM
+        pts = (tuple(start), (start[0] + ks.plug_mm + 2 * R("sync_pair"), start[1], start[2]),
+               (run_x, float(hdr[1]), float(hdr[2])), tuple(hdr))
+        out.append(Route(f"sync_{side}", "sync_pair", "sync_harness", ("zed_link_quad", f"sync_breakout_{side}"), pts,
+                         R("sync_pair")))
+    # fan leads: up from the fan's top, across to the Orin's front face, into the 40-pin header
+    kf = table["fan_lead"]   # the fan's own lead leaves its body: a plug only at the header
+    for side, f in lay.cooling.fans.items():
+        top = np.array([f.box.centre[0], f.box.centre[1], f.box.hi[2]])
+        z_run = top[2] + FAN_LEAD_RISE_MM
+        hdr = np.array([orin.hi[0], f.sign * ORIN_HEADER_Y_MM, orin.lo[2] + ORIN_HEADER_Z_MM])
+        pts = (tuple(top), (top[0], top[1], z_run), (top[0], hdr[1], z_run), (hdr[0] + kf.plug_mm + R("fan_lead"), hdr[1], hdr[2]),
+               tuple(hdr))
+        out.append(Route(f"fan_lead_{side}", "fan_lead", None, (f"fan_{side}", "jetson_agx_orin"), pts, R("fan_lead"),
+                         plugs=(False, True)))
+    # Wi-Fi pigtails: down from each antenna bulkhead's body under the roof, across into the devkit's side
+    for name, (part, pose) in lay.controls.items():
+        if not name.startswith("wifi_antenna"):
+            continue
+        body = placed_bounds(part.bounds(), pose)
+        a = np.array([pose.t[0], pose.t[1], body.lo[2]])
+        side_y = orin.hi[1] if a[1] > 0 else orin.lo[1]
+        z = orin.lo[2] + ORIN_WIFI_Z_MM
+        pts = (tuple(a), (a[0], a[1], z), (a[0], side_y, z))
+        out.append(Route(f"pigtail_{name.rsplit('_', 1)[1]}", "ufl_pigtail", "wifi_pigtail", (name, "jetson_agx_orin"),
+                         pts, R("ufl_pigtail")))
+    return out
+
+
+def _s_bend(a: np.ndarray, b: np.ndarray, plug: float, R: float) -> tuple[Vec3, Vec3]:
+    """The two corners of an S-bend from ``a`` (leaving along -x) to ``b`` (arriving along -x), each
+    corner after a plug's straight length and its own bend's tangent (solved by fixed point)."""
+    t = 0.0
+    for _ in range(50):
+        x1, x2 = a[0] - plug - t, b[0] + plug + t
+        theta = math.atan2(math.hypot(b[1] - a[1], b[2] - a[2]), max(x1 - x2, 1e-6))
+        t = R * math.tan(theta / 2)
+    return (x1, float(a[1]), float(a[2])), (x2, float(b[1]), float(b[2]))
+
+
+# ----------------------------------------------------------------------------- the check
+@dataclass(frozen=True)
+class CableReport:
+    paths: list[Path]
+    problems: list[str]
+    details: list[str]
+
+
+def cable_report(asm: Assembly, extra_routes: list[Route] = (), only: list[Route] | None = None) -> CableReport:
+    """Every route's bends, clashes and length; ``only`` replaces the rig's routes, ``extra_routes`` add to them."""
+    table = cable_table().kinds
+    rs = (list(only) if only is not None else routes(asm)) + list(extra_routes)
+    shapes = [(n.name, n.shape(asm.cache)) for n in asm.nodes]
+    boxes = {name: bounds_of(s) for name, s in shapes}
+    paths, problems, details = [], [], []
+    for r in rs:
+        if r.kind not in table:
+            raise KeyError(f"cable {r.name}: kind {r.kind!r} is not in cad/bought/cables.yaml")
+        pth = path_of(r, table[r.kind])
+        paths.append(pth)
+        problems += list(pth.problems)
+        solid = sweep(r, table[r.kind])
+        sb = bounds_of(solid)
+        hits = []
+        for name, s in shapes:
+            if not sb.overlaps(boxes[name], 1e-6):
+                continue
+            c = solid.intersect(s)
+            v = c.Volume() if c.Solids() else 0.0
+            if v > CONTACT_MM3:
+                hits.append(f"{name} ({v:.1f} mm^3)")
+        if hits:
+            problems.append(f"cable {r.name} ({r.ends[0]} to {r.ends[1]}) runs through {', '.join(hits)}")
+        bought = pth.bought_mm
+        details.append(f"{r.name}: {table[r.kind].description}, {r.ends[0]} -> {r.ends[1]}: {pth.length_mm:.0f} mm + "
+                       f"{table[r.kind].service_slack_mm:g} mm slack -> "
+                       + (f"{bought:.0f} mm" if bought is not None else "LONGER THAN ANY STOCK LENGTH")
+                       + f"; {len(pth.bends)} bends of {r.radius_mm:g} mm (min {table[r.kind].min_bend_radius_mm:g})"
+                       + ("" if hits else "; clear"))
+        if bought is None:
+            problems.append(f"cable {r.name}: {pth.length_mm:.0f} mm + slack is longer than every stock length of "
+                            f"{r.kind} ({', '.join(f'{s:g}' for s in table[r.kind].stock_lengths_mm)} mm)")
+    return CableReport(paths, problems, details)
+
+
+def cable_lengths(asm: Assembly) -> list[dict]:
+    """Per route what the BOM writes: name, kind, catalogue entry, route, slack and bought length (mm)."""
+    table = cable_table().kinds
+    out = []
+    for r in routes(asm):
+        pth = path_of(r, table[r.kind])
+        out.append(dict(route=r.name, kind=r.kind, description=table[r.kind].description, catalogue=r.catalogue,
+                        ends=list(r.ends), route_mm=round(pth.length_mm, 1), slack_mm=table[r.kind].service_slack_mm,
+                        bought_mm=pth.bought_mm, stock=bool(table[r.kind].stock_lengths_mm),
+                        min_bend_radius_mm=table[r.kind].min_bend_radius_mm, source=table[r.kind].source))
+    return out

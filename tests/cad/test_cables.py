@@ -1,0 +1,92 @@
+"""The key cables as swept paths (issue 16, "Cables"): bend radius, interference and lengths, with a
+bend too tight and a cable through a wall each failing the check."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from cad.bought.cables import cable_table
+from cad.cables import Route, centreline, path_of, routes, sweep
+
+KINDS = cable_table().kinds
+
+
+def test_stock_length_rounds_up_and_runs_out():
+    k = KINDS["gmsl2_coax"]
+    assert k.min_bend_radius_mm == pytest.approx(k.bend_factor * k.diameter_mm)
+    first = sorted(k.stock_lengths_mm)[0]
+    assert k.bought_length_mm(first - k.service_slack_mm) == first
+    assert k.bought_length_mm(first - k.service_slack_mm + 0.1) == sorted(k.stock_lengths_mm)[1]
+    assert k.bought_length_mm(max(k.stock_lengths_mm)) is None
+    reel = KINDS["sync_pair"]
+    assert not reel.stock_lengths_mm and reel.bought_length_mm(101) == math.ceil((101 + reel.service_slack_mm) / 10) * 10
+
+
+def _l_route(radius, first_leg=40.0, second_leg=40.0, kind="sync_pair"):
+    return Route("test_l", kind, None, ("a", "b"), ((0, 0, 0), (first_leg, 0, 0), (first_leg, second_leg, 0)), radius)
+
+
+def test_length_of_an_l_bend_is_straights_plus_the_quarter_arc():
+    r = KINDS["sync_pair"].min_bend_radius_mm
+    p = path_of(_l_route(r), KINDS["sync_pair"])
+    assert p.length_mm == pytest.approx(2 * (40 - r) + math.pi / 2 * r)
+    # OpenCascade's length of the built wire, an independent path to the same number
+    assert centreline(_l_route(r)).Length() == pytest.approx(p.length_mm, rel=1e-6)
+    assert not p.problems
+
+
+def test_a_bend_under_the_minimum_fails():
+    k = KINDS["sync_pair"]
+    p = path_of(_l_route(k.min_bend_radius_mm * 0.5), k)
+    assert any("needs at least" in s and f"{k.min_bend_radius_mm:g} mm" in s for s in p.problems), p.problems
+
+
+def test_a_bend_squeezed_against_its_plug_fails_with_the_radius_it_really_gets():
+    k = KINDS["sync_pair"]
+    # the first leg holds the plug but only half the bend's tangent length
+    leg = k.plug_mm + k.min_bend_radius_mm / 2
+    p = path_of(_l_route(k.min_bend_radius_mm, first_leg=leg), k)
+    bad = [s for s in p.problems if "too short" in s]
+    assert bad and "about 4.8 mm" in bad[0], p.problems      # (leg - plug) / tan(45 deg) = R / 2
+
+
+def test_swept_cable_is_a_valid_solid_of_its_diameter():
+    k = KINDS["gmsl2_coax"]
+    r = _l_route(k.min_bend_radius_mm, 60, 60, "gmsl2_coax")
+    s = sweep(r, k)
+    assert s.isValid() and len(s.Solids()) == 1
+    area = math.pi / 4 * k.diameter_mm ** 2
+    assert s.Volume() == pytest.approx(area * path_of(r, k).length_mm, rel=1e-3)
+
+
+@pytest.mark.slow
+def test_rig_cables_pass_and_bends_read_back_from_the_wires(asm, results):
+    r = results["cables"]
+    assert r.ok, r.details[:12]
+    rs = routes(asm)
+    assert {x.name for x in rs} >= {"gmsl2", "sync_left", "sync_right", "fan_lead_left", "fan_lead_right",
+                                    "pigtail_left", "pigtail_right"}
+    for x in rs:
+        arcs = [e for e in centreline(x).Edges() if e.geomType() == "CIRCLE"]
+        assert arcs, x.name
+        for e in arcs:   # the arc OpenCascade holds, not the number the route was given
+            assert e.radius() >= KINDS[x.kind].min_bend_radius_mm - 1e-6, x.name
+        assert r.data["lengths"][x.name] == pytest.approx(centreline(x).Length(), abs=0.1)
+
+
+@pytest.mark.slow
+def test_a_cable_through_the_wall_fails(asm):
+    from cad.checks import check_cables
+    i = asm.layout.case.interior
+    y = (i.lo[1] + i.hi[1]) / 2 + 20
+    z = (i.lo[2] + asm.layout.case.split_z) / 2
+    x = asm.layout.compute.orin_box.hi[0] + 30          # clear of the Orin, through the right side wall
+    wall = Route("test_wall", "sync_pair", None, ("a", "b"), ((x, i.lo[1] + 10, z), (x, i.lo[1] - 20, z)),
+                 KINDS["sync_pair"].min_bend_radius_mm)
+    res = check_cables(asm, only=[wall])
+    assert not res.ok
+    assert any(p.startswith("cable test_wall") and "case_lower" in p for p in res.details), res.details[:4]
+    inside = Route("test_inside", "sync_pair", None, ("a", "b"), ((x, y - 15, z), (x, y + 15, z)), 9.6)   # room for both plugs
+    assert check_cables(asm, only=[inside]).ok
