@@ -1,6 +1,6 @@
 """Exports: the assembly as one STEP with named, coloured parts and a GLB; every printed part as its
-own STEP and STL in its print orientation; SVG line drawings and PNG renders of the iso, front, top
-and exploded views. Everything goes into an :class:`~platform_tools.rig.atomic.OutputDir` stage first."""
+own STEP and STL in its print orientation, with its dimensioned drawing (``cad/drawings.py``); SVG line
+drawings and PNG renders of the iso, front, top and exploded views. Everything goes into an :class:`~platform_tools.rig.atomic.OutputDir` stage first."""
 from __future__ import annotations
 
 import json
@@ -21,7 +21,8 @@ FORMATS = ("STEP", "STL", "GLB", "SVG", "PNG")
 EXPORT_MARKER = ".rig-cad-export"
 #: what an export writes (relative paths, glob patterns): a folder holding only these is an older export
 EXPORT_PATTERNS = ("rig_assembly.step", "rig_assembly.glb", "assembly_tree.json", "camera_frames.json",
-                   "printed/*.step", "printed/*.stl", "views/*.svg", "views/*.png", EXPORT_MARKER)
+                   "printed/*.step", "printed/*.stl", "printed/*.drawing.svg", "views/*.svg", "views/*.png",
+                   EXPORT_MARKER)
 VIEWS = {  # name: (projection direction towards the viewer, exploded)
     "iso": ((1.0, 1.0, 0.8), False),
     "front": ((1.0, 0.0, 0.0), False),
@@ -134,7 +135,7 @@ def export_key(asm: Assembly, formats: set[str], tolerance: float, angular: floa
         h.update(f"{n.name}|{n.part_id}|{n.group}|{cache_mod.key(n.spec)}|{n.pose.matrix().tobytes().hex()}|{n.colour}|"
                  f"{sorted(n.props.items())}".encode())
     h.update(f"{sorted(formats)}|{tolerance!r}|{angular!r}|{asm.rig.hash}".encode())
-    for mod in ("cad.export", "cad.render", "cad.assembly", "cad.parts.common"):
+    for mod in ("cad.export", "cad.render", "cad.assembly", "cad.parts.common", "cad.drawings"):
         h.update(cache_mod._module_source_hash(mod).encode())
     return h.hexdigest()[:32]
 
@@ -186,7 +187,9 @@ def _export(asm: Assembly, stage: Path, formats: set[str], tolerance: float, ang
         write_glb(asm, p, max(tolerance, 0.2))
         out.append(p)
     if "SVG" in formats:
+        from .drawings import write_drawings
         out += write_svgs(asm, stage / "views")
+        out += write_drawings(asm, stage / "printed")   # the dimensioned drawings, beside each part's STEP/STL
     if "PNG" in formats:
         out += write_pngs(asm, stage / "views", max(tolerance, 0.3))
     out += write_metadata(asm, stage)
