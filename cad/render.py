@@ -55,8 +55,9 @@ def placed_actor(vtk, poly, colour, pose, opacity: float = 1.0):
     return actor
 
 
-def snapshot(vtk, ren, direction, size, path: Path, *, zoom: float, alpha: bool = False) -> Path:
-    """Render ``ren`` off screen, looking at the origin from ``direction`` (z up), into a PNG."""
+def snapshot(vtk, ren, direction, size, path: Path, *, zoom: float, alpha: bool = False, bounds=None) -> Path:
+    """Render ``ren`` off screen, looking at the origin from ``direction`` (z up), into a PNG; framed on
+    ``bounds`` (xmin, xmax, ymin, ymax, zmin, zmax) when given, else on everything."""
     win = vtk.vtkRenderWindow()
     win.SetOffScreenRendering(1)
     if alpha:
@@ -69,7 +70,13 @@ def snapshot(vtk, ren, direction, size, path: Path, *, zoom: float, alpha: bool 
     cam.SetFocalPoint(0, 0, 0)
     cam.SetPosition(*(d * 1000))
     cam.SetViewUp(*((0, 0, 1) if abs(d[2]) < 0.99 else (1, 0, 0)))
-    ren.ResetCamera()
+    if bounds is not None:
+        cx, cy, cz = ((bounds[0] + bounds[1]) / 2, (bounds[2] + bounds[3]) / 2, (bounds[4] + bounds[5]) / 2)
+        cam.SetFocalPoint(cx, cy, cz)
+        cam.SetPosition(*(np.array([cx, cy, cz]) + d * 1000))
+        ren.ResetCamera(*bounds)
+    else:
+        ren.ResetCamera()
     cam.Zoom(zoom)
     win.Render()
     grab = vtk.vtkWindowToImageFilter()

@@ -21,6 +21,7 @@ def write_site(asm, bom: Bom, guide: Guide, stage: Path) -> list[Path]:
     files = write_bom(bom, stage, command="docs", site=site, env=env)
     img = stage / "img"
     files += pictures.render_steps(asm, guide.steps, img)
+    files += pictures.render_cables(asm, guide.steps, img)
     files += pictures.render_overview(asm, img)
     from cad.electrical import power_counts
     counts = power_counts(asm)

@@ -22,6 +22,7 @@ from platform_tools.rig.typed import Gt, closest, convert
 from platform_tools.rig.problems import InputProblems
 from platform_tools.rig.yamlsource import load_typed
 
+from cad.bought.base import part_of_kind
 from bom.bom import Bom, Line
 
 DEFAULT_STEPS = Path(__file__).resolve().parents[1] / "assembly" / "steps.yaml"
@@ -41,6 +42,8 @@ class StepSpec:
     notes: tuple[str, ...] = ()
     #: direction from the model towards the camera of the step's picture (rig frame)
     view: Optional[tuple[float, float, float]] = None
+    #: cable routes (cad/cables.py names, or shell patterns) this step lays: drawn in its cable picture
+    cables: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -51,6 +54,10 @@ class GuideSpec:
     #: the tool each fastener needs, by its part id
     fastener_tools: Mapping[str, str]
     steps: tuple[StepSpec, ...]
+    #: minutes per operation (insert, screw, part, supply), the time estimate of every step
+    operation_minutes: Mapping[Literal["insert", "screw", "part", "supply"], Annotated[float, Gt(0)]]
+    #: where those minutes come from
+    operation_basis: str
 
 
 @dataclass
@@ -74,6 +81,17 @@ class Step:
     notes: list[str]
     view: tuple[float, float, float]
     picture: str = ""                # relative path, set by the site writer
+    closeup: str = ""                # the close-up framed on the step's new parts (set by the site writer)
+    callouts: list = field(default_factory=list)   # fastener labels of the close-up (docs.guide.pictures.callouts)
+    cables: list = field(default_factory=list)     # the cable routes this step lays (cad.cables.cable_lengths rows)
+    cable_picture: str = ""          # the cables drawn in the assembled rig (set by the site writer)
+    minutes: float = 0.0             # the time estimate (operation_minutes x the operations counted)
+    operations: dict = field(default_factory=dict)   # operation -> count
+
+    @property
+    def time_text(self) -> str:
+        plural = lambda op: "supplies" if op == "supply" else op + "s"
+        return ", ".join(f"{n} {op if n == 1 else plural(op)}" for op, n in self.operations.items() if n)
 
 
 @dataclass
@@ -81,6 +99,12 @@ class Guide:
     path: Path
     steps: list[Step]
     insert_temperature_c: float
+    operation_minutes: dict = field(default_factory=dict)
+    operation_basis: str = ""
+
+    @property
+    def minutes(self) -> float:
+        return sum(s.minutes for s in self.steps)
 
 
 DEFAULT_VIEW = (1.0, 0.75, 0.9)
@@ -90,7 +114,8 @@ def note_context(rig) -> dict:
     d = rig.desc
     return dict(rig=d, sync=d.sync, button=d.recording.button, printer=d.printing.printer,
                 insert=rig.part(d.enclosure.insert), screw=rig.part(d.enclosure.screw), heat_sink=d.enclosure.heat_sink,
-                sync_source=rig.part(d.sync.source_part), thermal=d.sensors.thermal)
+                sync_source=rig.part(d.sync.source_part), thermal=d.sensors.thermal,
+                battery=rig.part(part_of_kind(rig, "battery")))
 
 
 def load_guide(asm, bom: Bom, path: Path | str | None = None) -> Guide:
@@ -122,6 +147,7 @@ def load_guide(asm, bom: Bom, path: Path | str | None = None) -> Guide:
 
     names = [n.name for n in asm.nodes]
     node_by_name = {n.name: n for n in asm.nodes}
+    cables = bom.cables
     claimed: dict[str, str] = {}
     seen_ids: dict[str, int] = {}
     line_of = bom.line_of_node()
@@ -182,11 +208,22 @@ def load_guide(asm, bom: Bom, path: Path | str | None = None) -> Guide:
             tool = render(spec.fastener_tools[pid], ("fastener_tools", pid))
             if tool not in tools:
                 tools.append(tool)
+        supplies = [Item(lines[x], 0, []) for x in s.supplies if x in lines and x in supply_used]
+        laid = []
+        for j, pat in enumerate(s.cables):
+            found = [c for c in cables if fnmatch.fnmatch(c["route"], pat)]
+            if not found:
+                hint = closest(pat, [c["route"] for c in cables])
+                bad(key + ("cables", j), f"{pat!r} is not a cable route of cad/cables.py"
+                    + (f" (did you mean {hint!r}?)" if hint else ""))
+            laid += [c for c in found if c not in laid]
+        ops = operation_counts(rig, list(parts.values()), list(fasteners.values()), supplies)
         steps.append(Step(i + 1, s.id, render(s.title, key + ("title",)), added, list(parts.values()),
-                          list(fasteners.values()),
-                          [Item(lines[x], 0, []) for x in s.supplies if x in lines and x in supply_used],
+                          list(fasteners.values()), supplies,
                           tools, [render(t, key + ("notes", j)) for j, t in enumerate(s.notes)],
-                          tuple(s.view) if s.view else DEFAULT_VIEW))
+                          tuple(s.view) if s.view else DEFAULT_VIEW,
+                          minutes=sum(n * spec.operation_minutes[op] for op, n in ops.items()), operations=ops,
+                          cables=laid))
     missing = [n for n in names if n not in claimed]
     if missing:
         out.append(f"{path}: steps: no step adds {len(missing)} node(s) of the CAD assembly: "
@@ -198,4 +235,12 @@ def load_guide(asm, bom: Bom, path: Path | str | None = None) -> Guide:
                        + ("add its nodes to a step" if ln.nodes else "add it to a step's supplies"))
     if out:
         raise GuideError(out)
-    return Guide(path, steps, spec.insert_temperature_c[material])
+    return Guide(path, steps, spec.insert_temperature_c[material], dict(spec.operation_minutes), spec.operation_basis)
+
+
+def operation_counts(rig, parts: list[Item], fasteners: list[Item], supplies: list[Item]) -> dict[str, int]:
+    """What a step does, counted from its items: inserts set, screws driven, parts fitted, supplies used."""
+    insert = rig.desc.enclosure.insert
+    return dict(insert=sum(it.count for it in fasteners if it.line.entry_id == insert),
+                screw=sum(it.count for it in fasteners if it.line.entry_id != insert),
+                part=sum(it.count for it in parts), supply=len(supplies))

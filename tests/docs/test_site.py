@@ -90,7 +90,7 @@ def test_guide_content(docs_default):
     md = (docs_default / "assembly.md").read_text()
     assert "245 °C for PETG" in md and "thermal paste" in md and "J17 pin 16 (signal) and pin 2 (ground)" in md
     html = (docs_default / "assembly.html").read_text()
-    assert html.count('<section class="step"') == len(list((docs_default / "img").glob("step_*.png")))
+    assert html.count('<section class="step"') == len(list((docs_default / "img").glob("step_[0-9][0-9].png")))
 
 
 # ------------------------------------------------------------------------------- bad steps
@@ -121,3 +121,97 @@ def test_bad_steps(tmp_path, capsys, old, new, expected):
     assert "Traceback" not in err
     assert [p.name for p in out.iterdir()] == ["index.html"] and (out / "index.html").read_text() == "previous"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["docs", "steps.yaml"]
+
+
+STEP_TIMES = """return {
+  total: Number(document.querySelector('p.time-total').dataset.minutes),
+  steps: Array.from(document.querySelectorAll('section.step')).map(s => {
+    const t = s.querySelector('p.time');
+    const items = h => Array.from(s.querySelectorAll('h3')).filter(e => e.textContent === h)
+        .flatMap(e => Array.from(e.nextElementSibling.querySelectorAll('li')));
+    const sum = h => items(h).map(li => parseInt(li.textContent)).reduce((a, b) => a + b, 0);
+    return {id: s.id, minutes: Number(t.dataset.minutes), insert: Number(t.dataset.insert),
+            screw: Number(t.dataset.screw), part: Number(t.dataset.part), supply: Number(t.dataset.supply),
+            shown: t.getBoundingClientRect().height > 0, fasteners: sum('Fasteners'), parts: sum('Parts'),
+            supplies: items('Supplies').length};
+  }),
+};"""
+
+
+def test_step_times_read_in_the_browser(docs_default, browser):
+    """Each step's time, as the browser shows it, is the time table (docs/assembly/steps.yaml) times the
+    operations listed on the page itself (fasteners, parts, supplies); the total is their sum."""
+    import yaml
+    minutes = yaml.safe_load(STEPS.read_text())["operation_minutes"]
+    browser.get((docs_default / "assembly.html").as_uri())
+    got = browser.execute_script(STEP_TIMES)
+    assert len(got["steps"]) >= 10
+    for s in got["steps"]:
+        assert s["shown"], s["id"]
+        assert s["insert"] + s["screw"] == s["fasteners"] and s["part"] == s["parts"] and s["supply"] == s["supplies"], s
+        assert s["minutes"] == pytest.approx(sum(minutes[op] * s[op] for op in minutes)), s
+    assert got["total"] == pytest.approx(sum(s["minutes"] for s in got["steps"]))
+    lid = next(s for s in got["steps"] if s["id"] == "step-lid")
+    assert lid["screw"] > 0 and lid["insert"] > 0      # the lid step drives the lug and handle screws into inserts
+
+
+CLOSEUPS = """return Array.from(document.querySelectorAll('section.step')).map(s => {
+  const close = s.querySelector('figure.closeup img');
+  const fast = Array.from(s.querySelectorAll('h3')).filter(e => e.textContent === 'Fasteners')
+      .flatMap(e => Array.from(e.nextElementSibling.querySelectorAll('li'))).map(li => li.textContent);
+  return {id: s.id, close: close ? {src: close.getAttribute('src'), w: close.naturalWidth, complete: close.complete} : null,
+          callouts: Array.from(s.querySelectorAll('.callout')).map(c => [Number(c.dataset.count), c.dataset.size]),
+          fasteners: fast};
+});"""
+
+
+def test_closeups_and_screw_callouts_in_the_browser(docs_default, browser):
+    """Every step that adds parts has a close-up, loaded; its callouts name each screw size the step drives
+    with the count the step's fastener list gives; the close-up is framed on the new parts: the highlight
+    colour covers more of it than of the whole-rig picture (measured on the PNGs)."""
+    import cv2
+    import numpy as np
+    from docs.guide.pictures import HIGHLIGHT
+    browser.get((docs_default / "assembly.html").as_uri())
+    steps = browser.execute_script(CLOSEUPS)
+    with_close = [s for s in steps if s["close"]]
+    assert len(with_close) >= 10
+    for s in with_close:
+        assert s["close"]["complete"] and s["close"]["w"] == 960, s
+        screws = {size: n for n, size in s["callouts"] if not size.startswith("insert")}
+        listed = {}
+        for text in s["fasteners"]:
+            m = re.match(r"(\d+) x (M[\d.]+|1/4-20 UNC) x ([\d.]+) mm", text)
+            if m:
+                listed[f"{m.group(2)} x {float(m.group(3)):g}"] = listed.get(f"{m.group(2)} x {float(m.group(3)):g}", 0) + int(m.group(1))
+        assert screws == listed, (s["id"], screws, listed)
+
+    def blue_fraction(path):    # the highlight, lit: blue well above red and green
+        b, g, r = np.moveaxis(cv2.imread(str(path), cv2.IMREAD_COLOR).astype(float) / 255, 2, 0)
+        return float(np.mean((b > 0.4) & (b > r + 0.3) & (b > g + 0.15)))
+    assert HIGHLIGHT[2] > HIGHLIGHT[0] + 0.3 and HIGHLIGHT[2] > HIGHLIGHT[1] + 0.15
+    cores = next(s for s in with_close if s["id"] == "step-thermal_cores")
+    full = docs_default / cores["close"]["src"].replace("_close", "")
+    assert blue_fraction(docs_default / cores["close"]["src"]) > 1.5 * blue_fraction(full)
+
+
+CABLE_PICTURES = """return Array.from(document.querySelectorAll('figure.cables')).map(f => ({
+  step: f.closest('section').id, w: f.querySelector('img').naturalWidth, complete: f.querySelector('img').complete,
+  cables: Array.from(f.querySelectorAll('.cable')).map(c => [c.dataset.route, Number(c.dataset.boughtMm)]),
+}));"""
+
+
+def test_cable_pictures_of_the_wiring_steps(docs_default, browser):
+    """The steps that lay cables show them as routed, loaded in the browser, each cable at the length the
+    BOM's cables table buys (read from bom.html)."""
+    browser.get((docs_default / "assembly.html").as_uri())
+    figs = {f["step"]: f for f in browser.execute_script(CABLE_PICTURES)}
+    assert {"step-cables", "step-controls"} <= set(figs)
+    assert {r for r, _ in figs["step-cables"]["cables"]} >= {"gmsl2", "sync_left", "sync_right"}
+    assert {r for r, _ in figs["step-controls"]["cables"]} == {"pigtail_left", "pigtail_right"}
+    html = (docs_default / "bom.html").read_text()
+    bought = {m[0]: float(m[1]) for m in re.findall(r'id="cable-([a-z0-9-]+)" data-route-mm="[0-9.]+" data-bought-mm="([0-9.]+)"', html)}
+    for f in figs.values():
+        assert f["complete"] and f["w"] == 960, f
+        for route, mm in f["cables"]:
+            assert mm == bought[route.replace("_", "-")], route
