@@ -8,10 +8,11 @@ from typing import Sequence
 from platform_tools.rig.conventions import dispatch, tool_parser
 
 from calibration.commands import (detect as detect_cmd, extrinsics as extrinsics_cmd, nominal as nominal_cmd,
-    rig as rig_cmd, synth as synth_cmd, thermal as thermal_cmd, undistort as undistort_cmd,
-    validate as validate_cmd)
+    rig as rig_cmd, synth as synth_cmd, thermal as thermal_cmd, thermal_stereo as thermal_stereo_cmd,
+    undistort as undistort_cmd, validate as validate_cmd)
 
-COMMANDS = [nominal_cmd, synth_cmd, detect_cmd, thermal_cmd, validate_cmd, extrinsics_cmd, rig_cmd, undistort_cmd]
+COMMANDS = [nominal_cmd, synth_cmd, detect_cmd, thermal_cmd, validate_cmd, extrinsics_cmd, rig_cmd, undistort_cmd,
+            thermal_stereo_cmd]
 
 
 def build_parser() -> argparse.ArgumentParser:
