@@ -132,9 +132,16 @@ def export_base(rev: str, into: str) -> str:
     # the CLI imports the device's doctor, whose Boson checks import the Boson code: that file follows rev too
     shutil.copytree(REPO / "firmware", Path(into) / "firmware", ignore=shutil.ignore_patterns("__pycache__"))
     shutil.rmtree(Path(into) / "platform_tools" / "boson")
-    data = subprocess.run(["git", "archive", rev, "platform_tools/boson", "platform_tools/cli/boson_cmd.py",
-                           "platform_tools/cli/boson_emulator_cmd.py", "firmware/device/bosonprobe.py"],
-                          cwd=REPO, capture_output=True, check=True).stdout
+    paths = ["platform_tools/boson", "platform_tools/cli/boson_cmd.py", "platform_tools/cli/boson_emulator_cmd.py",
+             "firmware/device/bosonprobe.py"]
+    # boson-config itself moved to firmware/commands/boson_config.py (one command for rig-device and
+    # platform_tools): it follows rev too where rev has it, and is removed where rev does not
+    late = "firmware/commands/boson_config.py"
+    if subprocess.run(["git", "cat-file", "-e", f"{rev}:{late}"], cwd=REPO, capture_output=True).returncode == 0:
+        paths.append(late)
+    else:
+        (Path(into) / late).unlink(missing_ok=True)
+    data = subprocess.run(["git", "archive", rev, *paths], cwd=REPO, capture_output=True, check=True).stdout
     subprocess.run(["tar", "-x", "-C", into], input=data, check=True)
     return into
 

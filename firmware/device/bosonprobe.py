@@ -16,7 +16,6 @@ the rig records them, at the location the FFC decoder reads them from
 give every frame of a recording a wrong FFC status."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 from platform_tools.boson import discovery, identity
@@ -24,6 +23,7 @@ from platform_tools.boson.client import BosonClient
 from platform_tools.boson.codes import BosonError
 from platform_tools.boson.discovery import Found, Target
 from platform_tools.boson.operations import ClientPool, measure_frame_rate, per_camera, read_info
+from platform_tools.boson.options import config_command
 from platform_tools.boson.syncsetup import SYNC_MODES
 from platform_tools.boson.telemetry import EXPECTED_LOCATION
 from platform_tools.rig import Rig
@@ -38,24 +38,10 @@ SIDES = ("left", "right")
 
 def candidate_ports(rig: Rig, dev_dir: Path, found: list[Found]) -> tuple[list[Found], dict[str, str]]:
     """Every serial port that may hold a Boson, one per device: what discovery found, and the rig's udev
-    names (``dev_dir/<device_name>_serial``) that lead to a device discovery did not see; and side -> the
-    device its udev name leads to (only the names that exist)."""
-    ports = [f for f in found if f.source != "usb"]
-    devices = {f.device for f in ports}
-    udev: dict[str, str] = {}
-    for side in SIDES:
-        name = dev_dir / rig.boson_device_nodes(side)["serial"]
-        try:
-            device = os.path.realpath(name) if os.path.exists(name) else None
-        except OSError:
-            device = None
-        if device is None:
-            continue
-        udev[side] = device
-        if device not in devices:
-            ports.append(Found(None, str(name), device, None, "udev", discovery.by_path_for(device)))
-            devices.add(device)
-    return ports, udev
+    names that lead to a device discovery did not see (discovery.udev_ports); and side -> the device its
+    udev name leads to (only the names that exist)."""
+    extra, udev = discovery.udev_ports(rig, dev_dir, found)
+    return [f for f in found if f.source != "usb"] + extra, udev
 
 
 def _udev_problems(rig: Rig, udev: dict[str, str], known: identity.RigSurvey,
@@ -122,10 +108,16 @@ def checks(rig: Rig, dev_dir: Path, cameras: dict) -> list[Check]:
     out = [_identity_check(known, problems, cameras)]
     if not cameras:
         return out + [Check(n, SKIPPED, "no camera answered") for n in ("trigger", "sync mode", "telemetry")]
-    return out + _state_checks(rig, cameras)
+    return out + _state_checks(rig, cameras, dev_dir)
 
 
-def _state_checks(rig: Rig, cameras: dict) -> list[Check]:
+def _fix_command(rig: Rig, dev_dir: Path) -> str:
+    """The device's command (the images install no platform_tools) that puts both cameras as the rig wants
+    them: its sync mode and telemetry rows, on the rig file and overrides this pre-flight checked."""
+    return f"`{config_command('rig-device', rig, dev_dir)}`"
+
+
+def _state_checks(rig: Rig, cameras: dict, dev_dir: Path) -> list[Check]:
     sync_bad, trig_bad, telemetry_bad = [], [], []
     want_telemetry = rig.desc.on_device.thermal_telemetry_rows > 0
     rate = rig.desc.sync.rate_hz
@@ -146,11 +138,11 @@ def _state_checks(rig: Rig, cameras: dict) -> list[Check]:
                  f"frame counters advance at {rate:g} Hz")]
     out.append(Check("sync mode", FAILED if sync_bad else OK,
                      f"{', '.join(sync_bad)}, expected {want_mode} (sync.boson_mode): run "
-                     f"`platform_tools boson-config`" if sync_bad else f"{want_mode} as configured"))
+                     f"{_fix_command(rig, dev_dir)}" if sync_bad else f"{want_mode} as configured"))
     if want_telemetry:
         out.append(Check("telemetry", FAILED if telemetry_bad else OK,
                          f"{', '.join(telemetry_bad)}: the recording would carry no FFC status or a wrong one "
-                         f"(on_device.thermal_telemetry_rows); run `platform_tools boson-config`" if telemetry_bad
+                         f"(on_device.thermal_telemetry_rows); run {_fix_command(rig, dev_dir)}" if telemetry_bad
                          else f"on, rows at the {EXPECTED_LOCATION}: the FFC status is recorded from them"))
     else:
         out.append(Check("telemetry", SKIPPED, "on_device.thermal_telemetry_rows is 0"))

@@ -12,6 +12,9 @@ Module map:
 - ``discovery``  cameras present (by-id links, pyserial port list, pyusb) and the rig's left/right
 - ``operations`` identity and state, frame rate, FFC, factory defaults, raw commands; per camera, in parallel
 - ``syncsetup``  the plan from the rig; read, diff, apply, verify, check the trigger, persist, revert
+- ``transaction`` the set-up as one all-or-nothing transaction over the rig's cameras
+- ``rigconfig``  which cameras a command works on (identified by their serial), and boson-config's run over them
+- ``options``    the command-line options the boson-* commands share in either tool, and the fix doctor names
 - ``telemetry``  the wire format of the telemetry rows below each image (FFC status, frame counters)
 - ``emulator``   a stateful Boson on a pty with a by-id link, a simulated trigger and fault injection
 """

@@ -164,6 +164,25 @@ def discover() -> list[Found]:
     return found
 
 
+def udev_ports(rig, dev_dir: Path, found: list[Found]) -> tuple[list[Found], dict[str, str]]:
+    """The rig's udev names of the serial ports (``dev_dir/<device_name>_serial``, what the device's
+    containers are given instead of /dev/serial/by-id) that lead to a device ``found`` does not hold, one
+    Found each (source "udev"); and side -> the device each existing name leads to."""
+    devices = {f.device for f in found if f.source != "usb"}
+    extra: list[Found] = []
+    udev: dict[str, str] = {}
+    for side in ("left", "right"):
+        name = dev_dir / rig.boson_device_nodes(side)["serial"]
+        device = _target(name)
+        if device is None:
+            continue
+        udev[side] = device
+        if device not in devices:
+            extra.append(Found(None, str(name), device, None, "udev", by_path_for(device)))
+            devices.add(device)
+    return extra, udev
+
+
 def describe_found(found: list[Found]) -> str:
     usable = [f for f in found]
     if not usable:
@@ -190,7 +209,8 @@ def _rig_serial(rig, side: str) -> int:
     if sn is None:
         raise SelectionError(
             f"the {side} camera's serial number is not set: set sensors.thermal.{side}.serial in {rig.path} "
-            f"(or pass --set sensors.thermal.{side}.serial=SN; `platform_tools boson-info` lists the serials)")
+            f"(or pass --set sensors.thermal.{side}.serial=SN; `platform_tools boson-info`, or `rig-device doctor` "
+            "on the device, lists the serials)")
     return sn
 
 

@@ -5,14 +5,17 @@ udev names say (swapped, missing, duplicate, unknown), with the physical USB por
 from __future__ import annotations
 
 import os
+import shlex
 
 import pytest
 
+from firmware.cli import main as rig_device
 from firmware.device import bosonprobe
 from platform_tools.boson import commands as C
 from platform_tools.boson import discovery
 from platform_tools.boson.emulator import BosonState, EmulatedBoson
 from platform_tools.boson.emulator.state import FACTORY
+from platform_tools.boson.syncsetup import SYNC_MODES
 from platform_tools.boson.telemetry import EXPECTED_LOCATION
 from platform_tools.rig import load_rig
 from platform_tools.rig.checks import FAILED, OK
@@ -50,7 +53,28 @@ def test_telemetry_rows_at_the_top_fail_naming_the_camera(rig, make_boson, trigg
     make_boson(RIGHT, settings=dict(CONFIGURED, telemetry_location=int(C.TelemetryLocation.TOP)))
     check, _ = telemetry_check(rig, tmp_path)
     assert check.status == FAILED
-    assert "right has its rows at the top" in check.detail and "left" not in check.detail
+    problem = check.detail.split("`")[0]                    # the command named after it has the rig's overrides
+    assert "right has its rows at the top" in problem and "left" not in problem
+    # the fix named is the device's own command (the images install no platform_tools), with the rig's mode
+    assert "run `rig-device boson-config --slave " in check.detail and "platform_tools" not in check.detail
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mode,flag", [("master", "--master"), ("disabled", "--no-sync")])
+def test_a_wrong_sync_mode_names_the_device_command_that_fixes_it(make_boson, trigger, tmp_path, capsys, mode,
+                                                                  flag):
+    rig = load_rig(overrides=[f"sensors.thermal.left.serial={LEFT}", f"sensors.thermal.right.serial={RIGHT}",
+                              "on_device.trigger_watch_s=0.2", f"sync.boson_mode={mode}"])
+    trigger.start()
+    pair = make_boson(LEFT, settings=dict(CONFIGURED)), make_boson(RIGHT, settings=dict(CONFIGURED))  # both slave
+    check = doctor_checks(rig, tmp_path)[0]["sync mode"]
+    assert check.status == FAILED and "left is " in check.detail and "right is " in check.detail
+    argv = shlex.split(check.detail.split("`")[1])
+    assert argv[:3] == ["rig-device", "boson-config", flag] and check.detail.endswith("`")
+    # run as named, it is all a user needs: the same rig (file, overrides, udev folder), then doctor passes
+    assert rig_device(argv[1:]) == 0, capsys.readouterr().err
+    assert all(emu.state.settings["ext_sync_mode"] == SYNC_MODES[mode] for emu in pair)
+    assert doctor_checks(rig, tmp_path)[0]["sync mode"].status == OK
 
 
 # ----------------------------------------------------------------------------- which camera is which
