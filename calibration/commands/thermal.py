@@ -50,11 +50,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--target", default="checkerboard", choices=TARGET_KINDS,
                    help="checkerboard (default); marker-checkerboard: a checkerboard with a plain central marker "
                         "over its 2x2 middle squares and one dot in the marker's top-left quarter, which labels "
-                        "partial views with no board edge in them (docs/calibration.md)")
+                        "partial views with no board edge in them; circle-grid: W x H hot discs (OpenCV's "
+                        "patternSize); asymmetric-circle-grid: --board is the lattice, W twice the discs per row "
+                        "(OpenCV's (4, 11) is 8x11) (docs/calibration.md)")
     p.add_argument("--out", required=True, type=Path, metavar="DIR", help="output folder (replaced whole)")
     p.add_argument("--lens-model", default=None, metavar="M",
-                   help="default: chosen by the data (OPENCV8 unless it has a pole or fold inside the image, then "
-                        "OpenCV's Kannala-Brandt); or opencv8, splined, or a full mrcal LENSMODEL_* name "
+                   help="default: chosen by the data (OPENCV8 or OpenCV's Kannala-Brandt: a model with a pole or fold "
+                        "inside the image is out, held-out views decide between healthy ones); or opencv8, splined, or a full mrcal LENSMODEL_* name "
                         "(--solver mrcal only)")
     p.add_argument("--solver", choices=("mrcal", "opencv"), default="mrcal",
                    help="mrcal (default; gives projection uncertainty) or opencv (cv2.fisheye, Kannala-Brandt)")

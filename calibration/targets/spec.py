@@ -11,12 +11,25 @@
   still gets board coordinates. Its own squares are absent: the 3 x 3 corners of the marker
   (|i - mi| <= 1 and |j - mj| <= 1: the centre and the 8 where the marker's rim meets a square
   edge) are never reported.
+- ``circle-grid``: a symmetric grid of W x H hot discs on a cold board (OpenCV's
+  CALIB_CB_SYMMETRIC_GRID with patternSize (W, H)); disc (i, j) centred at (i s, j s), radius
+  CIRCLE_RADIUS_SPACING x s. The grid looks the same turned 180 deg (and 90 deg when W == H), so
+  its labels follow the image (calibration/detect/circles.py states the rule).
+- ``asymmetric-circle-grid``: OpenCV's CALIB_CB_ASYMMETRIC_GRID, given as the lattice the solver
+  sees: ``--board WxH`` is W lattice columns (twice the discs per row; W even) by H rows, lattice
+  point (i, j) at (i s, j s), and a disc only where i + j is even (row j's discs at i = 2k + j % 2:
+  OpenCV's patternSize (W / 2, H) with its squareSize s). The other half of the lattice is absent
+  (never reported, as the marker's corners are). Radius CIRCLE_RADIUS_SPACING x s (the discs'
+  nearest neighbours are s sqrt 2 apart). With H odd the pattern has no symmetry: every whole view
+  has one labelling.
 """
 from __future__ import annotations
 
 import numpy as np
 
-TARGET_KINDS = ("checkerboard", "marker-checkerboard")
+TARGET_KINDS = ("checkerboard", "marker-checkerboard", "circle-grid", "asymmetric-circle-grid")
+CIRCLE_KINDS = ("circle-grid", "asymmetric-circle-grid")
+CIRCLE_RADIUS_SPACING = 0.3          # a disc's radius, in lattice spacings s
 MARKER_HALF_SQUARES = 1              # the marker spans +-1 square around its centre corner
 MARKER_DOT_RADIUS_SQUARES = 0.3      # the orientation dot, in squares
 MARKER_RING = MARKER_HALF_SQUARES + 1  # the marker needs a ring of corners around it on the board
@@ -33,8 +46,24 @@ def parse_target(name: str) -> str:
 
 
 def minimum_board(kind: str) -> int:
-    """The fewest inner corners along either axis a ``kind`` target has."""
-    return 2 * MARKER_RING + 1 if kind == "marker-checkerboard" else 2
+    """The fewest inner corners (circles, lattice points) along either axis a ``kind`` target has."""
+    if kind == "marker-checkerboard":
+        return 2 * MARKER_RING + 1
+    return 3 if kind in CIRCLE_KINDS else 2
+
+
+def circle_present(kind: str, board: tuple[int, int]) -> np.ndarray:
+    """(H*W,) bool in grid order: the lattice points that carry a disc (all of them for a
+    ``circle-grid``; i + j even for an ``asymmetric-circle-grid``). TargetError for an odd W of an
+    asymmetric grid."""
+    W, H = int(board[0]), int(board[1])
+    j, i = np.mgrid[0:H, 0:W]
+    if kind == "asymmetric-circle-grid":
+        if W % 2:
+            raise TargetError(f"--board {W}x{H}: an asymmetric-circle-grid is given as its lattice, W = twice "
+                              f"the discs per row (OpenCV's patternSize ({W}, {H}) is --board {2 * W}x{H})")
+        return ((i + j) % 2 == 0).ravel()
+    return np.ones(W * H, bool)
 
 
 def marker_centre(board: tuple[int, int]) -> tuple[int, int]:
