@@ -8,11 +8,13 @@
    Inputs are the simulated rig's box scene rendered by ray casting at full resolution (a real depth
    map's coherence: random depths would measure cache misses, not the algorithm).
 
-3. ``--export RECORDING``: the whole export (``platform_tools export ... --workers 2``) of today's code (the
-   dataset package as committed, ``git archive HEAD platform_tools/dataset``, in a copy of this tree: only the
-   export code differs; its command, export_cmd.py, too) beside this tree's, on the same recording, alternating, after one untimed warm-up
-   each (numba compiles into each tree's cache); samples/s end to end (wall clock, indexing included) and the
-   ratio; then every file of the two outputs compared (bytes; PNGs that differ are decoded and compared).
+3. ``--export RECORDING``: the whole export (``platform_tools export ... --workers 2``) of previous code (the
+   dataset package and its command, export_cmd.py, at a git revision, ``--previous REV``, default ``b7c0534``: the
+   code issue 15 item 6 calls "today's"; repeat the option for several, e.g. ``--previous b7c0534 --previous
+   HEAD``; each in a copy of this tree where only the export code differs) beside this tree's, on the same
+   recording, alternating, after one untimed warm-up each (numba compiles into each tree's cache); samples/s end to
+   end (wall clock, indexing included) and the ratios; then every file of each previous output compared with this
+   tree's (bytes; PNGs that differ are decoded and compared).
    A full-size recording: ``platform_tools simulate-rig --out DIR --duration 12 --scale 1``.
 
 One core for 1 and 2: numba, OpenCV and BLAS are pinned to one thread before they load.
@@ -67,20 +69,22 @@ def rate(fn, n: int) -> float:
     return n / (time.perf_counter() - t)
 
 
-#: the export's code taken from git HEAD for the previous run: the dataset package and its command
+#: the export's code taken from git for a previous run: the dataset package and its command
 PREVIOUS = ("platform_tools/dataset", "platform_tools/cli/export_cmd.py")
+#: the code before issue 15 item 6's speed work ("today's" in the issue)
+BASELINE = "b7c0534"
 
 
-def previous_tree(tmp: Path) -> Path:
-    """A copy of this tree whose export code (PREVIOUS) is the committed one (git HEAD)."""
+def previous_tree(tmp: Path, rev: str = BASELINE) -> Path:
+    """A copy of this tree whose export code (PREVIOUS) is the one at git revision ``rev``."""
     import shutil
     import subprocess
     import tarfile
-    tree = tmp / "previous"
+    tree = tmp / f"previous-{rev}"
     shutil.copytree(REPO, tree, ignore=shutil.ignore_patterns(".git", ".venv", "build", "__pycache__",
                                                               "*.egg-info", "node_modules"))
     shutil.rmtree(tree / "platform_tools" / "dataset")
-    archive = subprocess.run(["git", "-C", str(REPO), "archive", "--format=tar", "HEAD", *PREVIOUS],
+    archive = subprocess.run(["git", "-C", str(REPO), "archive", "--format=tar", rev, *PREVIOUS],
                              check=True, capture_output=True).stdout
     with tarfile.open(fileobj=__import__("io").BytesIO(archive)) as tar:
         tar.extractall(tree)
@@ -123,11 +127,11 @@ def compare_outputs(a: Path, b: Path) -> dict:
     return res
 
 
-def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2) -> dict:
+def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, revs=(BASELINE,)) -> dict:
     import tempfile
     with tempfile.TemporaryDirectory(prefix="bench-export-") as tmp:
         tmp = Path(tmp)
-        trees = {"previous": previous_tree(tmp), "new": REPO}
+        trees = {rev: previous_tree(tmp, rev) for rev in revs} | {"new": REPO}
         for name, tree in trees.items():          # warm-up: numba compiles into each tree's cache
             run_export(tree, recording, tmp / f"warm-{name}", max(rate / 4, 0.25), workers)
         times = {n: [] for n in trees}
@@ -138,8 +142,9 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2) -
                 times[name].append(dt)
         sps = {n: samples[n] / min(t) for n, t in times.items()}
         return {"recording": str(recording), "rate_hz": rate, "workers": workers, "samples": samples,
-                "seconds": times, "samples_per_s": sps, "ratio": sps["new"] / sps["previous"],
-                "outputs": compare_outputs(tmp / "out-previous", tmp / "out-new")}
+                "seconds": times, "samples_per_s": sps,
+                "ratio": {rev: sps["new"] / sps[rev] for rev in revs},
+                "outputs": {rev: compare_outputs(tmp / f"out-{rev}", tmp / "out-new") for rev in revs}}
 
 
 def main(argv=None) -> int:
@@ -149,24 +154,28 @@ def main(argv=None) -> int:
                     help="only the end-to-end export, previous code beside this tree's, on this recording")
     ap.add_argument("--rate", type=float, default=1.0, help="with --export: samples per second (default 1)")
     ap.add_argument("--repeats", type=int, default=2, help="with --export: timed runs of each (default 2; best kept)")
+    ap.add_argument("--previous", action="append", metavar="REV",
+                    help=f"with --export: the git revision of the previous code (repeatable; default {BASELINE})")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     if args.export:
-        r = bench_export(args.export, args.rate, args.repeats)
+        r = bench_export(args.export, args.rate, args.repeats, revs=tuple(args.previous or (BASELINE,)))
         if args.json:
             print(json.dumps(r, indent=2))
             return 0
-        o = r["outputs"]
         print(f"export of {r['recording']} at {r['rate_hz']:g} Hz, {r['workers']} workers, best of "
               f"{len(r['seconds']['new'])}:")
-        for n in ("previous", "new"):
+        for n in r["seconds"]:
             print(f"  {n:<9} {r['samples'][n]:>5} samples in {min(r['seconds'][n]):7.1f} s: "
                   f"{r['samples_per_s'][n]:6.2f} samples/s  (runs: {', '.join(f'{t:.1f}' for t in r['seconds'][n])} s)")
-        print(f"  ratio new / previous: {r['ratio']:.2f}x")
-        print(f"  outputs: {o['files']} files, {o['identical_bytes']} identical bytes, {len(o['same_pixels'])} PNGs "
-              f"with other bytes but the same pixels, {len(o['different'])} different "
-              f"({', '.join(o['different'][:5])}), only in previous {len(o['only_in_previous'])}, only in new "
-              f"{len(o['only_in_new'])}")
+        for rev, ratio in r["ratio"].items():
+            o = r["outputs"][rev]
+            print(f"  ratio new / {rev}: {ratio:.2f}x")
+            print(f"    outputs: {o['files']} files, {o['identical_bytes']} identical bytes, {len(o['same_pixels'])} "
+                  f"PNGs with other bytes but the same pixels, {len(o['different'])} different "
+                  f"({', '.join(o['different'][:5])}), only in {rev} {len(o['only_in_previous'])} "
+                  f"({', '.join(o['only_in_previous'][:3])}), only in new {len(o['only_in_new'])} "
+                  f"({', '.join(o['only_in_new'][:3])})")
         return 0
     rig = load_rig()
     res = {}
