@@ -100,60 +100,30 @@ def check_interference(asm: Assembly) -> CheckResult:
                        dict(pairs=len(pairs)))
 
 
-def min_wall_of(shape: cq.Shape, samples: int = 3, where: list | None = None) -> float:
-    """Thinnest material found by casting rays inward from sample points on every face."""
-    from OCP.BRepAdaptor import BRepAdaptor_Surface
-    from OCP.BRepClass import BRepClass_FaceClassifier
-    from OCP.BRepLProp import BRepLProp_SLProps
-    from OCP.gp import gp_Lin, gp_Dir, gp_Pnt, gp_Pnt2d
-    from OCP.IntCurvesFace import IntCurvesFace_ShapeIntersector
-    from OCP.TopAbs import TopAbs_IN, TopAbs_REVERSED
-    inter = IntCurvesFace_ShapeIntersector()
-    inter.Load(shape.wrapped, 1e-6)
-    best = math.inf
-    for face in shape.Faces():
-        ad = BRepAdaptor_Surface(face.wrapped)
-        u0, u1, v0, v1 = ad.FirstUParameter(), ad.LastUParameter(), ad.FirstVParameter(), ad.LastVParameter()
-        for i in range(samples):
-            for k in range(samples):
-                u = u0 + (i + 0.5) / samples * (u1 - u0)
-                v = v0 + (k + 0.5) / samples * (v1 - v0)
-                if BRepClass_FaceClassifier(face.wrapped, gp_Pnt2d(u, v), 1e-7).State() != TopAbs_IN:
-                    continue
-                props = BRepLProp_SLProps(ad, u, v, 1, 1e-6)
-                if not props.IsNormalDefined():
-                    continue
-                nrm = props.Normal()
-                if face.wrapped.Orientation() == TopAbs_REVERSED:
-                    nrm.Reverse()
-                p = props.Value()
-                d = gp_Dir(-nrm.X(), -nrm.Y(), -nrm.Z())
-                start = gp_Pnt(p.X() + d.X() * 1e-4, p.Y() + d.Y() * 1e-4, p.Z() + d.Z() * 1e-4)
-                inter.Perform(gp_Lin(start, d), 0.0, 1e4)
-                if inter.IsDone() and inter.NbPnt() > 0:
-                    dist = min(inter.WParameter(j) for j in range(1, inter.NbPnt() + 1)) + 1e-4
-                    if dist < best and where is not None:
-                        where[:] = [(round(p.X(), 2), round(p.Y(), 2), round(p.Z(), 2))]
-                    best = min(best, dist)
-    return best
+def min_wall_of(shape: cq.Shape, samples: int | None = None, where: list | None = None, **kw) -> float:
+    """Thinnest material of ``shape`` (cad/walls.py: face grids, edges, adaptive refinement)."""
+    from .walls import min_wall_of as measure
+    return measure(shape, samples, where, **kw)
 
 
 def check_min_wall(asm: Assembly) -> CheckResult:
+    """Every printed part's thinnest wall (cad/walls.py) against the printer's minimum wall. Near an
+    edge the wall is read half a nozzle inside the face, where the slicer's outer perimeter runs."""
+    from .walls import thin_places
     p = asm.rig.desc.printing.printer
     need = p.nozzle_mm * p.min_wall_nozzles
     details, bad, data = [], [], {}
     for pid, n in asm.printed().items():
         if n.category != "printed":
             continue
-        where: list = []
-        t = min_wall_of(n.local_shape(asm.cache), where=where)
-        data[pid] = round(t, 2)
-        line = f"{pid}: thinnest wall {t:.2f} mm at {where[0] if where else '?'} (part frame)"
-        details.append(line)
-        if t < need - 1e-3:
-            bad.append(line + f" < {need:g} mm")
+        best, places = thin_places(n.local_shape(asm.cache), below=need - 1e-3, edge_inset=p.nozzle_mm / 2)
+        data[pid] = dict(thinnest_mm=round(best.thickness, 2) if best else None, point=best.point if best else None,
+                         feature=best.feature if best else None, thin=[(round(w.thickness, 2), w.point) for w in places])
+        details.append(f"{pid}: thinnest wall {best.line() if best else 'none found'} (part frame)")
+        bad += [f"{pid}: {w.line()} < {need:g} mm (part frame)" for w in places]
     return CheckResult("minimum wall", not bad, f"every printed wall >= {need:g} mm ({p.min_wall_nozzles:g} x {p.nozzle_mm:g} mm nozzle)"
-                       if not bad else f"{len(bad)} parts have walls under {need:g} mm", bad + details, data)
+                       if not bad else f"{len(bad)} places in {len({b.split(':')[0] for b in bad})} parts have walls under {need:g} mm",
+                       bad + details, data)
 
 
 def distance(a: cq.Shape, b: cq.Shape) -> float:

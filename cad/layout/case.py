@@ -94,6 +94,16 @@ def lug_screw_point(case: Case, c: Constants, x: float, s: float) -> Vec3:
     return (x, y, case.split_z)
 
 
+def lug_spot_face(case: Case, c: Constants, x: float, s: float) -> Bounds:
+    """The flat spot face the lid lug's screw head sits on: the lug's gusset cut away above the head,
+    from the screw's axis outwards (a counterbore through the 45 deg gusset left a knife-edge sliver
+    on its outboard side, 0.06 mm thick at the edge; the wall check found it)."""
+    _, y, z = lug_screw_point(case, c, x, s)
+    o, p, top = case.outer, c.lug_protrusion_mm, case.split_z + c.lid_lug_mm
+    y0, y1 = (y, o.hi[1] + p + HOLE_LEAD_MM) if s > 0 else (o.lo[1] - p - HOLE_LEAD_MM, y)
+    return Bounds((x - c.lug_width_mm / 2 - HOLE_LEAD_MM, y0, top), (x + c.lug_width_mm / 2 + HOLE_LEAD_MM, y1, top + p + HOLE_LEAD_MM))
+
+
 def port_cutout(fits: Fits, shell: Shell, compute: Compute) -> Bounds:
     """The rear wall's window onto the Orin's ports: a notch open at the split, so the tray prints
     without bridging it (a closed window is a ~110 mm bridge, beyond any printer's ``max_bridge_mm``);
@@ -133,11 +143,18 @@ def place_vents(rig: Rig, c: Constants, fits: Fits, shell: Shell, lugs, cameras:
         r_win = (o.hi[0] - cam[0]) * math.tan(math.radians(half))
         lens_r = cameras.lens.diameter_mm / 2 + fits.clear
         r_win = max(r_win, lens_r)
-        y = t.fin_bank.centre[1]
-        while abs(y) + v.slot_width_mm / 2 + fits.min_wall < i.hi[1]:
-            if abs(y - cam[1]) - v.slot_width_mm / 2 >= r_win + fits.min_wall:
+        y, last, outermost = t.fin_bank.centre[1], None, False
+        # the slots stay on the front's flat, a minimum wall short of where its corner radius begins (a slot
+        # into the radius left a 0.47 mm sliver between its side and the rounded face: the wall check)
+        y_max = min(o.hi[1] - rig.desc.enclosure.corner_radius_mm, i.hi[1]) - fits.min_wall - v.slot_width_mm / 2
+        while not outermost:
+            if abs(y) >= y_max:
+                y, outermost = t.sign * y_max, True
+            clear_of_last = last is None or abs(y - last) >= pitch
+            if abs(y - cam[1]) - v.slot_width_mm / 2 >= r_win + fits.min_wall and clear_of_last:
                 zl = min(v.slot_length_mm, t.fin_bank.size[2])
                 vents.append(Bounds((i.hi[0] - run, y - v.slot_width_mm / 2, t.fin_bank.centre[2] - zl / 2),
                                     (o.hi[0] + run, y + v.slot_width_mm / 2, t.fin_bank.centre[2] + zl / 2)))
+                last = y
             y += t.sign * pitch
     return tuple(vents)

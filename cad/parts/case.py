@@ -16,6 +16,7 @@ import cadquery as cq
 import numpy as np
 
 from ..layout import Hole, Layout, fov_half_angles_deg
+from ..layout.case import lug_spot_face
 from ..layout.constants import HOLE_LEAD_MM
 from ..geom import Bounds, box, cylinder, moved
 from .common import PrintSetup, hole_tools
@@ -124,8 +125,13 @@ def case_spec(lay: Layout) -> CaseSpec:
     # the ZED X window: a notch in the lid from the split plane to above the camera
     z = lay.cameras.zed_box
     r_in = max(lay.rig.desc.enclosure.corner_radius_mm - lay.fits.wall, 0.0)   # past the inner corner fillet
-    boxes.append(Bounds((lay.case.outer.hi[0] - lay.fits.wall - r_in - 1.0, z.lo[1] - lay.fits.clear, lay.case.split_z - 0.01),
-                        (lay.case.outer.hi[0] + 1.0, z.hi[1] + lay.fits.clear, z.hi[2] + lay.fits.clear)))
+    # across the whole front (corners too): a notch side inside the corner radius left a knife edge between
+    # it and the rounded face (0.21 mm at 0.1 mm from the edge: the wall check); the side walls end on a
+    # flat face before the radius begins
+    o = lay.case.outer
+    boxes.append(Bounds((o.hi[0] - lay.fits.wall - r_in - 1.0, min(z.lo[1] - lay.fits.clear, o.lo[1] - 1.0), lay.case.split_z - 0.01),
+                        (o.hi[0] + 1.0, max(z.hi[1] + lay.fits.clear, o.hi[1] + 1.0), z.hi[2] + lay.fits.clear)))
+    boxes += [lug_spot_face(lay.case, c, x, s) for x, s in lay.case.lugs]
     half = fov_half_angles_deg(lay.rig)["thermal"][0] + c.fov_margin_deg
     cones = []
     for t in lay.cameras.thermal.values():
