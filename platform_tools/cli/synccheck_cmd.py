@@ -17,7 +17,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "jitter; FFC periods; clock steps of the host; which trigger pulse exposed "
                                    "every thermal frame (its offset after the ZED, uncertainty and evidence: the "
                                    "stated latency, trigger gaps, the Boson frame counter, continuity across a "
-                                   "step); the jitter and drift (ppm) of the frames of one trigger, clock steps "
+                                   "step); the clock steps of each stream (when, which clocks, how big, and how a "
+                                   "step known modulo a trigger period was sized: the IMU, the frame counter, the "
+                                   "recorder's log times); the jitter and drift (ppm) of the frames of one trigger, clock steps "
                                    "taken out. Pass/fail against processing.sync_limits (change them with --set "
                                    "processing.sync_limits.KEY=VALUE). Exit 0 pass, 1 a check failed (an "
                                    "ambiguous trigger included), 2 bad input.")
@@ -110,6 +112,11 @@ def cmd_sync_check(args: argparse.Namespace) -> int:
                   f"{_fmt(s.get('jitter_ms'), '.3f'):>7} {d.get('events', '-'):>6} {d.get('missing_frames', '-'):>8}")
         for st in report["clock_steps"]:
             print(f"clock step: {st['step_ns'] / 1e6:+.3f} ms at stamp {st['at_ns']} (found on {st['found_on']})")
+            for clock, c in (st.get("clocks") or {}).items():     # per stream: its size and how it was chosen
+                size = (f"{c['step_ms']:+.1f} ms, sized by the {c['sized_by']}" if c["exact"] else
+                        f"{c['step_ms']:+.1f} ms modulo one period: candidates "
+                        + ", ".join(f"{x:+.1f}" for x in c["candidates_ms"]) + " ms (0, 1, 2... frames lost at it)")
+                print(f"  {clock}: {size}" + (f" ({c['evidence']})" if c["evidence"] else ""))
         for cam, periods in report["ffc"].items():
             for e in periods:
                 print(f"FFC {cam}: {(e['end_ns'] - e['start_ns']) / 1e9:.2f} s from stamp {e['start_ns']} "

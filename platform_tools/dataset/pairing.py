@@ -1,6 +1,7 @@
 """Which frames make the dataset: four-camera pairs, FFC frames out, sampled at a rate.
 
-- Times are header stamps with the host's clock steps taken out (sync.find_clock_steps).
+- Times are header stamps with each stream's own clock steps taken out (the steps the trigger pairing found
+  per stream, :mod:`.clocksteps`; the ZED right and depth follow the ZED left).
 - Each Boson frame pairs with the ZED left frame of the trigger that exposed it (:mod:`.trigger`: the
   offset of any size, resolved by causality, trigger gaps, the rig's stated latency, continuity
   across clock steps; an ambiguity is an error, never a guess); the ZED right and depth pair with the
@@ -19,7 +20,8 @@ import numpy as np
 
 from .layout import NO_DEPTH_HINT
 from .recording import Recording
-from .sync import corrected, ffc_periods, find_clock_steps, offsets_ns, triggers
+from . import clocksteps
+from .sync import corrected_times, ffc_periods, find_clock_steps, pair_residuals, triggers
 
 OTHERS = ("zed_right", "zed_depth", "thermal_left", "thermal_right")
 THERMAL = ("thermal_left", "thermal_right")
@@ -59,11 +61,19 @@ def plan(rec: Recording, rig, *, rate_hz: float, tolerance_ms: float, ffc_margin
                                      "the ZED depth: " + NO_DEPTH_HINT)
     others = OTHERS if depth else tuple(s for s in OTHERS if s != "zed_depth")
     period = 1e9 / rig.desc.sync.rate_hz
-    steps = find_clock_steps(rec, period)
-    off = offsets_ns(rec, rig)
-    tc = {s: corrected(rec.streams[s].stamp_ns, steps) for s in ("zed_left",) + others}
+    # the Bosons pair by the trigger that exposed each frame (trigger.py), never by the nearest stamp; every
+    # stream's stamps lose its own clock's steps (the ZED right and depth: the ZED left's)
+    trig = triggers(rec, rig)
+    per = {"zed_left": trig.reference.steps} | {c: ct.steps for c, ct in trig.cameras.items()}
+    steps = clocksteps.events({n: (v, rec.streams[n].log_ns) for n, v in per.items()},
+                              find_clock_steps(rec, period), period)
+    tc = corrected_times(rec, per, ("zed_left",) + others, period)
     order = {s: np.argsort(tc[s], kind="stable") for s in tc}
     ref = tc["zed_left"]
+    off = {"zed_left": 0.0}
+    for s in others[:-2]:
+        _, r = pair_residuals(ref, tc[s], period)
+        off[s] = float(np.median(r)) if len(r) else 0.0
     match, ok = {}, np.ones(len(ref), bool)
     resid = {}
     for s in others[:-2]:                     # zed_right (zed_depth): the same grab as the left: the same stamp
@@ -73,8 +83,6 @@ def plan(rec: Recording, rig, *, rate_hz: float, tolerance_ms: float, ffc_margin
         match[s] = order[s][j]
         resid[s] = r / 1e6
         ok &= np.abs(r) <= tolerance_ms * 1e6
-    # the Bosons: by the trigger that exposed each frame (trigger.py), never by the nearest stamp
-    trig = triggers(rec, rig)
     for s in THERMAL:
         ct = trig.cameras[s]
         pos = {int(k): i for i, k in enumerate(ct.trigger) if k >= 0}

@@ -2,10 +2,13 @@
 
 All times are the header stamps the drivers wrote (host clock). In order:
 
-1. Clock steps: the host clock jumping (NTP, a manual set) shows as one gap, or a negative interval,
-   at the same instant in every stream. Found on the IMU (200 Hz, densest) when it is recorded,
-   else where every camera has a gap within one frame period of the others. Stamps after a step are
-   corrected by it before anything else is computed.
+1. Clock steps, per stream: the host clock jumping (NTP, a manual set) shows as a gap, or a negative
+   interval, in the streams whose stamps follow it (the ZED's; usb_cam's Boson stamps do not). Each
+   stream's own steps are found on its stamps (:mod:`.trigger`) and sized by the IMU, the frame counter,
+   the recorder's log times or the device's status (:mod:`.clocksteps`); each stream's stamps lose its
+   own steps before anything else is computed. ``find_clock_steps`` (the IMU, or a gap common to every
+   camera) remains for the IMU's own statistics, the instant of an IMU-sized step, and a recording whose
+   steps cannot be read per stream.
 2. Per stream: intervals (mean, std, min, max), drops (an interval above ``drop_interval_factor`` x
    the nominal period; missing frames = round(interval / period) - 1), and the per-frame jitter
    (std of the intervals that are one period, / sqrt 2: each interval is the difference of two stamps).
@@ -27,7 +30,7 @@ import numpy as np
 import logging
 
 from .recording import CAMERAS, Recording, RecordingError
-from . import counters, motion, trigger as trig
+from . import clocksteps, counters, motion, trigger as trig
 
 log = logging.getLogger(__name__)
 
@@ -192,23 +195,44 @@ def analyse(rec: Recording, rig, limits: Limits) -> dict:
     period = 1e9 / rate
     rec.require("thermal_left", "thermal_right", why="sync-check needs both thermal streams")
     steps = find_clock_steps(rec, period)
-    streams, times = {}, {}
+    # each stream's own clock steps (trigger.py, sized by clocksteps.py), taken out of that stream's stamps
+    try:
+        assignment, trig_err = triggers(rec, rig), None
+        per = {"zed_left": assignment.reference.steps} | {c: ct.steps for c, ct in assignment.cameras.items()}
+    except RecordingError as exc:
+        assignment, trig_err = None, str(exc)
+        try:
+            prep, _, own = stream_steps(rec, rig)
+            per = {"zed_left": prep.reference.steps} | own
+        except RecordingError:
+            per = None
+    common = {n: corrected(rec.streams[n].stamp_ns, steps) for n in CAMERAS + ("zed_depth",) if rec.has(n)}
+    times = common
+    if per is not None:
+        times = corrected_times(rec, per, CAMERAS + ("zed_depth",), period)
+        events = clocksteps.events({n: (v, rec.streams[n].log_ns) for n, v in per.items()}, steps, period)
+        # the nearest-stamp statistics: a step of every clock at once is one host step, taken out at one size (the
+        # IMU's, or the cameras' common gap: a thermal size fitted from its segments would absorb a drift); a step
+        # of some clocks only, per stream
+        if not (steps and all(len(ev["clocks"]) == 3 for ev in events)):
+            common = times
+        steps = events
+    streams = {}
     for name in CAMERAS + ("zed_depth",):
         if not rec.has(name):
             continue
-        t = corrected(rec.streams[name].stamp_ns, steps)
-        times[name] = t
+        t = times[name]
         streams[name] = {"topic": rec.streams[name].topic} | stream_report(t, period, limits.drop_interval_factor)
     if rec.has("zed_imu"):
-        t = corrected(rec.streams["zed_imu"].stamp_ns, steps)
+        t = corrected(rec.streams["zed_imu"].stamp_ns, find_clock_steps(rec, period))
         d = np.diff(t)
         streams["zed_imu"] = {"topic": rec.streams["zed_imu"].topic, "frames": int(len(t)),
                               "interval_ms": _stats_ms(d)}
     ffc = {c: ffc_periods(rec, c, period) for c in ("thermal_left", "thermal_right")}
     pairs, series = {}, {}
     for a, b in PAIRS:
-        if a in times and b in times:
-            t, r = pair_residuals(times[a], times[b], period)
+        if a in common and b in common:
+            t, r = pair_residuals(common[a], common[b], period)
             pairs[f"{a}-{b}"] = pair_report(t, r)
             series[f"{a}-{b}"] = (t, r)
     checks = []
@@ -229,11 +253,7 @@ def analyse(rec: Recording, rig, limits: Limits) -> dict:
         checks.append({"check": f"{name} drift", "value": round(p["drift_ppm"], 2),
                        "limit": limits.max_drift_ppm, "unit": "ppm",
                        "ok": abs(p["drift_ppm"]) - 3 * p["drift_stderr_ppm"] <= limits.max_drift_ppm})
-    try:
-        assignment = triggers(rec, rig)
-        trig_rep, trig_err = trigger_report(assignment), None
-    except RecordingError as exc:
-        assignment, trig_rep, trig_err = None, None, str(exc)
+    trig_rep = trigger_report(assignment) if assignment is not None else None
     checks.append({"check": "trigger of every thermal frame", "value": trig_err or "established",
                    "limit": "unambiguous", "unit": "", "ok": trig_err is None})
     by_trigger = {}
@@ -298,53 +318,130 @@ def trigger_pair_report(ta: np.ndarray, ca: "trig.CameraTriggers", tb: np.ndarra
             "drift_ppm": slope * 1000.0, "drift_stderr_ppm": se * 1000.0}
 
 
-def offsets_ns(rec: Recording, rig) -> dict[str, float]:
-    """Constant offset of each camera after the ZED left (median pairing residual), for the export."""
+def triggers(rec: Recording, rig) -> "trig.Assignment":
+    """Which trigger exposed every thermal frame (see :mod:`.trigger`; image motion, :mod:`.motion`, as the last
+    resort; steps known modulo a period sized by :mod:`.clocksteps`); RecordingError when ambiguous."""
     period = 1e9 / rig.desc.sync.rate_hz
-    steps = find_clock_steps(rec, period)
-    ref = corrected(rec.streams["zed_left"].stamp_ns, steps)
-    out = {"zed_left": 0.0}
-    for c in ("zed_right", "thermal_left", "thermal_right", "zed_depth"):
-        if rec.has(c):
-            _, r = pair_residuals(ref, corrected(rec.streams[c].stamp_ns, steps), period)
-            out[c] = float(np.median(r)) if len(r) else 0.0
+    zl = rec.streams["zed_left"]
+    out, used, _ = stream_steps(rec, rig)
+    ref = out.reference
+    frames = motion.Reader(rec, rig)        # read only when the stamps leave a camera's offset ambiguous
+    windows = rig.desc.sync.stamp_latency_ms
+    for cam, counter in used.items():
+        st = rec.streams[cam]
+        w = windows.get(cam)
+        try:
+            out.cameras[cam] = trig.assign(zl.stamp_ns, st.stamp_ns, period, camera=cam, ref=ref,
+                                           window_ms=(w.min.value, w.max.value) if w else None,
+                                           counter=counter, where=f"{rec.path}: {st.topic}: ",
+                                           motion=frames.resolver(cam, ref.trigger),
+                                           size_steps=clocksteps.thermal_sizer(st.stamp_ns, st.log_ns, ref,
+                                                                               zl.stamp_ns, zl.log_ns, period))
+        except trig.TriggerError as exc:
+            raise RecordingError(str(exc)) from None
     return out
 
 
-def triggers(rec: Recording, rig) -> "trig.Assignment":
-    """Which trigger exposed every thermal frame (see :mod:`.trigger`; image motion, :mod:`.motion`, as the last
-    resort); RecordingError when ambiguous."""
+def stream_steps(rec: Recording, rig) -> tuple["trig.Assignment", dict, dict]:
+    """The clock steps of every stream before any pairing: (an Assignment holding the ZED left's reference, its
+    steps sized where the evidence allows; thermal camera -> the frame counter used or None; thermal camera ->
+    its own steps, sized likewise)."""
     period = 1e9 / rig.desc.sync.rate_hz
     zl = rec.streams["zed_left"]
+    for name in ("zed_left", "thermal_left", "thermal_right"):
+        s = rec.streams[name]
+        i = clocksteps.out_of_order(s.stamp_ns, period)
+        if i is not None:
+            raise RecordingError(
+                f"{rec.path}: {s.topic}: frames out of order from stamp {int(s.stamp_ns[i])} (several intervals under "
+                f"a quarter period within {clocksteps.DISORDER_FRAMES} frames): the log times went back (a "
+                f"recorder clock stepped backward, or log times copied from stamps that did), and this reader "
+                f"orders messages by log time; missing evidence: the arrival order")
     imu = rec.streams["zed_imu"].stamp_ns if rec.has("zed_imu") else None
     ref = trig.reference(zl.stamp_ns, period, imu)
     out = trig.Assignment(period, ref)
-    frames = motion.Reader(rec, rig)        # read only when the stamps leave a camera's offset ambiguous
-    windows = rig.desc.sync.stamp_latency_ms
+    used = {}
     for cam in ("thermal_left", "thermal_right"):
         st = rec.streams[cam]
-        w = windows.get(cam)
         counter = getattr(st, "counter", None)
         why = counters.implausible(st.stamp_ns, counter, period) if counter is not None else None
         if why:
             out.ignored_counters[cam] = f"{st.topic}: the telemetry frame counter is not used: {why}"
             log.warning("%s: %s", rec.path, out.ignored_counters[cam])
             counter = None
+        used[cam] = counter
+    own = {}
+    for cam, c in used.items():
+        t = rec.streams[cam].stamp_ns
+        own[cam] = trig.counter_steps(t, c, period) if c is not None else \
+            trig.find_steps(t, trig.local_indices(t, period), period)
+    # the ZED's steps known modulo a period, sized by the log times against each Boson (clocksteps.py), then each
+    # Boson's against the ZED
+    clocksteps.size_reference_steps(ref, zl.stamp_ns, zl.log_ns, {
+        cam: (rec.streams[cam].stamp_ns, rec.streams[cam].log_ns, own[cam]) for cam in used}, period,
+        device=device_clock_steps(rec))
+    for cam in used:
+        st = rec.streams[cam]
+        clocksteps.thermal_sizer(st.stamp_ns, st.log_ns, ref, zl.stamp_ns, zl.log_ns, period)(own[cam])
+    return out, used, own
+
+
+#: the keys of the device's status values (firmware/device/clockstep.py), read by name
+CLOCK_STEP_KEY = "clock_step_ns"
+
+
+def device_clock_steps(rec: Recording) -> dict[str, dict[int, int]]:
+    """Per thermal camera: frame stamp -> ``clock_step_ns`` (the host clock's steps since usb_cam started, as the
+    device's FFC status node publishes them in each frame's DiagnosticArray, header stamp = the frame's), from its
+    status topic; empty when the recording has no such values (another node, a Bool status, none)."""
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+    topics = {rec._topics.get(f"{c}_status"): c for c in ("thermal_left", "thermal_right")}
+    topics.pop(None, None)
+    out: dict[str, dict[int, int]] = {c: {} for c in topics.values()}
+    decoder, decoders = DecoderFactory(), {}
+    for fi, f in enumerate(rec.files):
         try:
-            out.cameras[cam] = trig.assign(zl.stamp_ns, st.stamp_ns, period, camera=cam, ref=ref,
-                                           window_ms=(w.min.value, w.max.value) if w else None,
-                                           counter=counter, where=f"{rec.path}: {st.topic}: ",
-                                           motion=frames.resolver(cam, ref.trigger))
-        except trig.TriggerError as exc:
-            raise RecordingError(str(exc)) from None
+            with open(f, "rb") as fh:
+                for schema, channel, msg in make_reader(fh).iter_messages(topics=list(topics)):
+                    if not schema or not schema.name.endswith("DiagnosticArray"):
+                        continue
+                    dec = decoders.get((fi, schema.id)) or decoders.setdefault((fi, schema.id),
+                                                                                 decoder.decoder_for("cdr", schema))
+                    m = dec(msg.data)
+                    stamp = m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
+                    for st in m.status:
+                        values = {kv.key: kv.value for kv in st.values}
+                        if CLOCK_STEP_KEY in values:
+                            try:
+                                out[topics[channel.topic]][stamp] = int(values[CLOCK_STEP_KEY])
+                            except ValueError:
+                                continue
+        except (McapError, EOFError, ValueError) as exc:
+            raise RecordingError(f"{f}: damaged MCAP ({type(exc).__name__}: {exc})") from None
+    return {c: v for c, v in out.items() if v}
+
+
+def corrected_times(rec: Recording, steps: dict, names, period_ns: float) -> dict[str, np.ndarray]:
+    """Per stream, its stamps with its own clock's steps taken out (``steps``: zed_left / thermal camera -> its
+    steps); the ZED right and depth follow the ZED left (the same grab)."""
+    zl = rec.streams["zed_left"]
+    out = {"zed_left": clocksteps.corrected(zl.stamp_ns, steps["zed_left"])}
+    for name in names:
+        if name in out or not rec.has(name):
+            continue
+        s = rec.streams[name]
+        out[name] = clocksteps.corrected(s.stamp_ns, steps[name]) if name in steps else \
+            clocksteps.follow(s.stamp_ns, s.log_ns, zl.stamp_ns, zl.log_ns, out["zed_left"], period_ns)
     return out
 
 
 def trigger_report(a: "trig.Assignment") -> dict:
     """Per camera: offset after the ZED (per segment), its uncertainty, how it was established, steps."""
     def steps(ct):
-        return [{"at_ns": s.at_ns, "step_ms": s.step_ns / 1e6, "exact": s.exact, "sized_by": s.sized_by}
-                for s in ct.steps]
+        return [{"at_ns": s.at_ns, "step_ms": s.step_ns / 1e6, "exact": s.exact, "sized_by": s.sized_by,
+                 "candidates_ms": [c / 1e6 for c in s.candidates_ns], "evidence": s.evidence} for s in ct.steps]
     out = {"zed_left": {"clock_steps": steps(a.reference)}}
     for cam, ct in a.cameras.items():
         out[cam] = {"segments": [{"frames": [g.first, g.last], "offset_ms": g.offset_ns / 1e6,

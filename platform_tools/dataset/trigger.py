@@ -23,7 +23,8 @@ Evidence that disagrees, or none that leaves exactly one candidate, ends in :cla
 intervals, ``max(1, round(interval / period))``) are constant but for jitter; a step is where the
 median of the frames after differs from the median before by more than ``STEP_MIN_NS``. Backward steps
 (either sign, any size) are sized exactly; a forward step is known modulo one period unless the
-segments' alignment, the IMU or the frame counter says how many periods it held. With the frame counter
+segments' alignment, the IMU or the frame counter says how many periods it held, or the evidence
+:mod:`.clocksteps` reads (the recorder's log times, the device's status) does. With the frame counter
 a thermal stream's steps are found on the counter's trigger grid, at their full size.
 
 Pure functions over stamp arrays (numpy); no I/O.
@@ -69,7 +70,11 @@ class Step:
     at_ns: int                  # its stamp as recorded
     step_ns: int                # size (wrapped to one period when sized by stamps alone, forward)
     exact: bool                 # sized without the modulo-one-period ambiguity
-    sized_by: str = "stamps"    # "stamps", "imu" or "frame counter"
+    sized_by: str = "stamps"    # "stamps", "imu", "frame counter", "log times" or "device status"
+    #: the sizes the stamps allow (:func:`.clocksteps.candidates`), when the step was known modulo a period
+    candidates_ns: list = field(default_factory=list)
+    #: how the whole number of periods was chosen, or why it could not be (one phrase; :mod:`.clocksteps`)
+    evidence: str = ""
 
 
 @dataclass
@@ -158,6 +163,8 @@ def reference(t: np.ndarray, period_ns: float, imu: np.ndarray | None = None) ->
     The IMU (same clock, 200 Hz, no drops in practice) sizes a forward step exactly."""
     k = local_indices(t, period_ns)
     steps = find_steps(t, k, period_ns)
+    ref = CameraTriggers("zed_left", k, np.zeros(len(t)), [Segment(0, len(t) - 1, 0.0, 0.0, "reference", [0.0])],
+                         steps, 0.0)
     if imu is not None and len(imu) > 10:
         di = np.diff(imu.astype(np.int64))
         med = float(np.median(di))
@@ -170,18 +177,30 @@ def reference(t: np.ndarray, period_ns: float, imu: np.ndarray | None = None) ->
                 j = near[np.argmax(np.abs(di[near] - med))]
                 size = di[j] - med
                 if abs(size) >= STEP_MIN_NS and abs(((size - st.step_ns) / period_ns) - round((size - st.step_ns) / period_ns)) < 0.1:
-                    st.step_ns, st.exact = int(round(st.step_ns + round((size - st.step_ns) / period_ns)
-                                                      * period_ns)), True
-                    st.sized_by = "imu"
-                    # the triggers that passed over the step, now that its size is known
-                    d = int(t[st.index]) - int(t[st.index - 1])
-                    k[st.index:] += max(1, round((d - st.step_ns) / period_ns)) - (k[st.index] - k[st.index - 1])
+                    size_step(ref, t, st, int(round(st.step_ns + round((size - st.step_ns) / period_ns) * period_ns)),
+                              "imu", "the IMU's interval across it (same clock, 200 Hz)", period_ns, refit=False)
+    _refit(ref, t)
+    return ref
+
+
+def size_step(ref: CameraTriggers, t: np.ndarray, st: Step, size_ns: int, by: str, evidence: str,
+              period_ns: float, refit: bool = True) -> None:
+    """Give a step of the ZED left (``ref``) its full size: the triggers that passed over it follow (the trigger
+    numbering after it), and the grid residuals."""
+    st.step_ns, st.exact, st.sized_by, st.evidence = int(size_ns), True, by, evidence
+    d = int(t[st.index]) - int(t[st.index - 1])
+    k = ref.trigger
+    k[st.index:] += max(1, round((d - st.step_ns) / period_ns)) - (k[st.index] - k[st.index - 1])
+    if refit:
+        _refit(ref, t)
+
+
+def _refit(ref: CameraTriggers, t: np.ndarray) -> None:
     res = np.zeros(len(t))
-    for a, b in segments_of(len(t), [s.index for s in steps]):
-        res[a:b + 1] = _grid_residual(t[a:b + 1], k[a:b + 1])
-    jit = float(np.std(res)) if len(res) > 2 else 0.0
-    return CameraTriggers("zed_left", k, res, [Segment(0, len(t) - 1, 0.0, 0.0, "reference", [0.0])],
-                          steps, jit)
+    for a, b in segments_of(len(t), [s.index for s in ref.steps]):
+        res[a:b + 1] = _grid_residual(t[a:b + 1], ref.trigger[a:b + 1])
+    ref.residual_ns = res
+    ref.jitter_ns = float(np.std(res)) if len(res) > 2 else 0.0
 
 
 def _grid_residual(t: np.ndarray, k: np.ndarray) -> np.ndarray:
@@ -207,15 +226,19 @@ def _grid(tz: np.ndarray, kz: np.ndarray, steps: list[Step]):
 # ----------------------------------------------------------------------------- another camera
 def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, window_ms: tuple[float, float] | None,
            counter: np.ndarray | None = None, ref: CameraTriggers | None = None,
-           where: str = "", motion=None) -> CameraTriggers:
+           where: str = "", motion=None, size_steps=None) -> CameraTriggers:
     """Trigger number of every frame of one camera, in the ZED left's numbering. ``motion``: the last resort,
     ``(first frame, base indices of the segment's frames, {candidate n: offset ms}) -> motion.Decision``
-    (:meth:`.motion.Reader.resolver`), asked only when the other evidence leaves several candidates."""
+    (:meth:`.motion.Reader.resolver`), asked only when the other evidence leaves several candidates.
+    ``size_steps``: given this stream's own clock steps, sizes those known modulo a period when other evidence
+    can (:func:`.clocksteps.thermal_sizer`: the recorder's log times, the device's status)."""
     ref = ref or reference(tz, period_ns)
     kz = ref.trigger
     zgrid = _grid(tz, kz, ref.steps)
     own = counter_steps(ts, counter, period_ns) if counter is not None else \
         find_steps(ts, local_indices(ts, period_ns), period_ns)
+    if size_steps is not None:
+        size_steps(own)
     # cut where either stream's clock stepped: the camera's own steps, and the ZED's (mapped to this
     # stream: the same event when this stream stepped there too, else where its stamps pass the ZED's
     # last stamp before the step, both still on the clock before it)
@@ -349,9 +372,12 @@ def assign(tz: np.ndarray, ts: np.ndarray, period_ns: float, *, camera: str, win
             ms = ", ".join(f"{(phase + m) * P / 1e6:.1f}" for m in (in_window or cands)[:4])
             missing = []
             if after_unknown_step is not None:
-                missing.append(f"a clock stepped forward at stamp {after_unknown_step.at_ns} by "
-                               f"{after_unknown_step.step_ns / 1e6:+.1f} ms modulo one period (record the IMU "
-                               f"to size it)")
+                st = after_unknown_step
+                clock = "the ZED clock" if st is (cut or {}).get("zed") else "this camera's clock"
+                sizes = ", ".join(f"{c / 1e6:+.1f}" for c in st.candidates_ns[:4]) or f"{st.step_ns / 1e6:+.1f}"
+                missing.append(f"{clock} stepped at stamp {st.at_ns} by {st.step_ns / 1e6:+.1f} ms modulo one "
+                               f"period (candidates {sizes} ms: 0, 1, 2... frames lost at it); nothing sized it: "
+                               + (st.evidence or "record the IMU to size a ZED-clock step"))
             elif window_ms is None:
                 missing.append(f"no stated latency (sync.stamp_latency_ms.{camera})")
             elif not in_window:
