@@ -7,7 +7,12 @@ the off-axis angle). Where that happens inside the field the camera sees, pixels
 or none, undistortion maps go wrong and unprojection jumps branches. So:
 
 - **round trip**: every pixel of the imager (a dense grid, border and corner pixels included) is
-  unprojected and projected again; it must come back within ROUND_TRIP_TOL_PX;
+  unprojected and projected again; it must come back within ROUND_TRIP_TOL_PX. Where the unprojector
+  gives no ray at all, the ray is sought again from the nearest pixel that has one (Newton on
+  ``project``): mrcal 2.2's numerical unprojection of OPENCV8 gives up at the odd isolated pixel of a
+  healthy lens, and a model is not at fault for its unprojector's solver. Such pixels pass only when a
+  ray continuous with its neighbour's projects back within the tolerance (``unproject_retried`` counts
+  them); beyond a fold there is no ray to find, so they stay failed;
 - **radially monotonic**: along every azimuth, the projected distance from the principal point must
   grow strictly with the off-axis angle theta, from 0 out to the angle the image corners are seen at
   (the model's own corner angle, or larger when the caller knows the field is wider: the angle of the
@@ -31,6 +36,9 @@ ROUND_TRIP_GRID_WIDTH = 81     # 81 x 65 points over a 640 x 512 imager, every b
 N_AZIMUTHS = 72                # every 5 deg, plus the four image corners' own directions
 THETA_STEP_RAD = math.radians(0.05)
 MAX_THETA_RAD = math.radians(89.0)
+#: the retry of a pixel without a ray: Newton steps, the finite-difference step on x/z, y/z, and how far (deg
+#: off-axis) the ray found may be from its neighbour's (a ray on another branch is not the same surface)
+RETRY_STEPS, RETRY_DIFF, RETRY_MAX_JUMP_DEG = 30, 1e-7, 5.0
 
 Project = Callable[[np.ndarray], np.ndarray]
 Unproject = Callable[[np.ndarray], np.ndarray]
@@ -44,6 +52,7 @@ class LensHealth:
     corner_angle_deg: float           # the angle monotonicity was required out to
     fold_angle_deg: float | None      # first angle where the projected radius stops growing; None: none
     fold_azimuth_deg: float | None
+    unproject_retried: int = 0        # grid points whose unprojector gave no ray, found from a neighbour
 
     @property
     def round_trip_ok(self) -> bool:
@@ -74,7 +83,7 @@ class LensHealth:
     def summary(self) -> dict:
         return dict(ok=self.ok, round_trip_max_px=self.round_trip_max_px, round_trip_bad=self.round_trip_bad,
                     corner_angle_deg=self.corner_angle_deg, fold_angle_deg=self.fold_angle_deg,
-                    problem=self.problem())
+                    unproject_retried=self.unproject_retried, problem=self.problem())
 
 
 def off_axis_deg(v: np.ndarray) -> np.ndarray:
@@ -86,9 +95,11 @@ def off_axis_deg(v: np.ndarray) -> np.ndarray:
 
 
 def round_trip(project: Project, unproject: Unproject, imagersize: tuple[int, int],
-               n_width: int = ROUND_TRIP_GRID_WIDTH) -> tuple[np.ndarray, np.ndarray]:
-    """(grid (N, 2) px, error (N,) px) of unproject -> project over the whole imager; inf where
-    unprojection gives no ray or projection no pixel."""
+               n_width: int = ROUND_TRIP_GRID_WIDTH, *, retried: list | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(grid (N, 2) px, error (N,) px) of unproject -> project over the whole imager; inf where no ray
+    projects back to the pixel. A pixel the unprojector gives no ray for is sought again from its nearest
+    neighbour with a ray (:func:`ray_from_neighbour`); ``retried``, when given, receives the indices for
+    which that found a ray."""
     q = imager_grid(imagersize, n_width).reshape(-1, 2)
     with np.errstate(all="ignore"):
         v = np.asarray(unproject(q), dtype=float).reshape(-1, 3)
@@ -98,7 +109,37 @@ def round_trip(project: Project, unproject: Unproject, imagersize: tuple[int, in
             q2 = np.asarray(project(np.ascontiguousarray(v[good])), dtype=float).reshape(-1, 2)
             e = np.linalg.norm(q2 - q[good], axis=-1)
             err[good] = np.where(np.isfinite(e), e, np.inf)
+        if good.any() and not good.all():
+            lost = np.nonzero(~good)[0]
+            have = np.nonzero(good & (err <= ROUND_TRIP_TOL_PX))[0]
+            if len(have):
+                nb = have[np.argmin(np.linalg.norm(q[lost, None] - q[None, have], axis=-1), axis=1)]
+                e = ray_from_neighbour(project, q[lost], v[nb])
+                err[lost] = e
+                if retried is not None:
+                    retried.extend(int(i) for i in lost[np.isfinite(e)])
     return q, err
+
+
+def ray_from_neighbour(project: Project, q: np.ndarray, v0: np.ndarray) -> np.ndarray:
+    """Errors (N,) px of the rays Newton finds for pixels ``q`` (N, 2), each started from the ray ``v0`` (N, 3) of
+    a neighbouring pixel, as (x/z, y/z); inf where it does not converge within ROUND_TRIP_TOL_PX, or ends more
+    than RETRY_MAX_JUMP_DEG off-axis from where it started (not the neighbour's surface)."""
+    u = v0[:, :2] / v0[:, 2:3]
+    ones = np.ones((len(q), 1))
+
+    def f(u):
+        return np.asarray(project(np.ascontiguousarray(np.hstack([u, ones]))), dtype=float).reshape(-1, 2)
+
+    with np.errstate(all="ignore"):
+        for _ in range(RETRY_STEPS):
+            r = f(u) - q
+            J = np.stack([(f(u + RETRY_DIFF * np.eye(2)[k]) - f(u)) / RETRY_DIFF for k in range(2)], axis=-1)
+            step = np.linalg.solve(J + 1e-12 * np.eye(2), -r[..., None])[..., 0]
+            u = u + np.where(np.isfinite(step), step, 0.0)
+        e = np.linalg.norm(f(u) - q, axis=-1)
+        jump = np.abs(off_axis_deg(np.hstack([u, ones])) - off_axis_deg(v0))
+    return np.where(np.isfinite(e) & (e <= ROUND_TRIP_TOL_PX) & (jump <= RETRY_MAX_JUMP_DEG), e, np.inf)
 
 
 def fold_angle(project: Project, principal_point: tuple[float, float], theta_max_rad: float,
@@ -129,7 +170,8 @@ def check(project: Project, unproject: Unproject, imagersize: tuple[int, int],
     """Both checks of the module docstring. The radius must grow out to the larger of the angle the
     model itself sees the image corners at and ``min_corner_angle_deg`` (e.g. the widest observed
     board corner), plus a degree."""
-    q, err = round_trip(project, unproject, imagersize)
+    retried: list[int] = []
+    q, err = round_trip(project, unproject, imagersize, retried=retried)
     w, h = imagersize
     corners = np.array([[0.0, 0.0], [w - 1.0, 0.0], [0.0, h - 1.0], [w - 1.0, h - 1.0]])
     with np.errstate(all="ignore"):
@@ -143,7 +185,7 @@ def check(project: Project, unproject: Unproject, imagersize: tuple[int, int],
     bad = err > ROUND_TRIP_TOL_PX
     i = int(np.argmax(np.where(np.isfinite(err), err, 1e300)))
     return LensHealth(float(err.max()), int(bad.sum()), (float(q[i, 0]), float(q[i, 1])), corner_deg,
-                      fold, fold_az)
+                      fold, fold_az, len(retried))
 
 
 def check_mrcal(lensmodel: str, intrinsics: np.ndarray, imagersize: tuple[int, int], *,

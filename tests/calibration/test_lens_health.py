@@ -148,3 +148,43 @@ def test_the_default_lens_model_is_chosen_by_the_data():
     named = solve(obs, solver="mrcal", lens_model="opencv8", focal_px=408.3, nominal_corner_angle_deg=75.0)
     assert named.lensmodel == "LENSMODEL_OPENCV8"
     assert not solution_health(named, min_corner_angle_deg=75.0).ok
+
+
+def test_a_pixel_the_unprojector_gives_up_on_is_found_from_its_neighbour_and_counted():
+    """mrcal 2.2's numerical unprojection of OPENCV8 gives no ray at the odd isolated pixel of a healthy lens:
+    the model is not at fault. An unprojector that gives up at three grid pixels (the centre's among them) of
+    the truth lens: those rays are found again from their neighbours, the check passes and counts them."""
+    lm, intr = fisheye_truth(408.3, SIZE)
+    q_all, _ = health.round_trip(lambda v: mrcal.project(v, lm, intr),
+                                 lambda q: mrcal.unproject(np.ascontiguousarray(q), lm, intr, normalize=True), SIZE)
+    lost = q_all[[len(q_all) // 2, 17, len(q_all) - 40]]
+
+    def flaky(q):
+        v = mrcal.unproject(np.ascontiguousarray(q), lm, intr, normalize=True)
+        hit = (np.abs(q[:, None] - lost[None]).max(axis=-1) < 1e-9).any(axis=1)
+        v[hit] = np.nan
+        return v
+
+    h = health.check(lambda v: mrcal.project(np.ascontiguousarray(v), lm, intr), flaky, SIZE,
+                     (float(intr[2]), float(intr[3])))
+    assert h.ok and h.unproject_retried == 3 and h.round_trip_max_px < 1e-3, h.summary()
+    # the same unprojector giving up on every pixel of a column band: each is found from the band's edge
+    band = lambda q: np.where((np.abs(q[:, :1] - 320) < 30), np.nan, flaky(q))   # noqa: E731
+    hb = health.check(lambda v: mrcal.project(np.ascontiguousarray(v), lm, intr), band, SIZE,
+                      (float(intr[2]), float(intr[3])))
+    assert hb.ok and hb.unproject_retried > 3, hb.summary()
+
+
+def test_an_unprojector_that_gives_up_beyond_a_fold_still_fails():
+    """Where no ray reaches a pixel (past the fold of r (1 - 0.3 r^2)), the retry finds none: still failed."""
+    lm, intr = fisheye_truth(408.3, SIZE)
+    fold = np.array(intr, dtype=float)
+    fold[4:] = [-0.3, 0, 0, 0, 0, 0, 0, 0]
+    q, err = health.round_trip(lambda v: mrcal.project(np.ascontiguousarray(v), lm, fold),
+                               lambda q: mrcal.unproject(np.ascontiguousarray(q), lm, fold, normalize=True), SIZE)
+    # the largest image radius any ray reaches: r (1 - 0.3 r^2) peaks at r = 1 / sqrt(0.9), in units of f
+    r_peak = (1 / math.sqrt(0.9)) * (1 - 0.3 / 0.9)
+    rad = np.hypot((q[:, 0] - fold[2]) / fold[0], (q[:, 1] - fold[3]) / fold[1])
+    assert (err > health.ROUND_TRIP_TOL_PX).sum() > 100
+    assert np.all(rad[err > health.ROUND_TRIP_TOL_PX] > r_peak * 0.98)     # nothing past the fold rescued
+    assert np.all(err[rad < r_peak * 0.95] <= health.ROUND_TRIP_TOL_PX)
