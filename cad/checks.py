@@ -472,8 +472,18 @@ def check_button_reach(asm: Assembly, button: str = "record_button") -> CheckRes
                                                            f"(enclosure.ergonomics.thumb_reach_mm)"] + lines, d)
 
 
+def check_airflow(asm: Assembly) -> CheckResult:
+    """Every air path (each blower's exhaust, the devkit's intake and exhaust) free enough for its fan,
+    on the B-rep and on the exported STL, and the devkit's fan inlet clear (cad/airflow.py)."""
+    from .airflow import airflow_report
+    r = airflow_report(asm)
+    return CheckResult("airflow", not r.problems, f"{len(r.readings)} air paths free enough for their fans, the devkit's "
+                       f"fan inlet {min(r.gap_brep_mm, r.gap_stl_mm):.1f} mm clear" if not r.problems else
+                       f"{len(r.problems)} air path problem(s)", r.problems + r.details, r.data)
+
+
 CHECKS = [check_valid, check_interference, check_min_wall, check_clearances, check_bed, check_printable, check_fov,
-          check_battery, check_vents, check_assembly_order, check_datums, check_mass, check_grip_span, check_stands, check_button_reach, check_electrical, check_power_parts,
+          check_battery, check_vents, check_airflow, check_assembly_order, check_datums, check_mass, check_grip_span, check_stands, check_button_reach, check_electrical, check_power_parts,
           check_cables, check_estimates]
 
 

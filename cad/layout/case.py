@@ -28,6 +28,11 @@ LUG_SCREW_OUTBOARD_MM = 0.25
 PORT_CUT_OVERRUN_MM = 1.0
 #: a vent slot's cutting box runs this far past both faces of its wall
 VENT_CUT_OVERRUN_MM = 0.5
+#: the lid's front ledge is left this much under half the printer's longest bridge
+LEDGE_MARGIN_MM = 2.0
+#: the roof's intake slots for the devkit's fan reach this far beyond the devkit's side (the antennas
+#: stand 14 mm beyond it, cad/layout/controls.py)
+ROOF_BEYOND_ORIN_MM = 8.0
 
 
 @dataclass(frozen=True)
@@ -104,6 +109,17 @@ def lug_spot_face(case: Case, c: Constants, x: float, s: float) -> Bounds:
     return Bounds((x - c.lug_width_mm / 2 - HOLE_LEAD_MM, y0, top), (x + c.lug_width_mm / 2 + HOLE_LEAD_MM, y1, top + p + HOLE_LEAD_MM))
 
 
+def front_ledge_chamfer(rig: Rig, fits: Fits, shell: Shell, cameras: Cameras) -> float:
+    """The 45 deg chamfer under the roof behind the lid's front wall: the lid prints on its rear face,
+    so the front wall above the ZED X's notch is a ledge hanging from the roof, as long as the roof is
+    above the notch (20.5 mm once the capture card stood clear of the devkit's fan: a 41 mm span, the
+    overhang check). The chamfer shortens it to ``LEDGE_MARGIN_MM`` under half the printer's
+    ``max_bridge_mm``; 0 when it is short enough."""
+    notch_top = cameras.zed_box.hi[2] + fits.clear
+    ledge = shell.interior.hi[2] - notch_top
+    return max(0.0, ledge - (rig.desc.printing.printer.max_bridge_mm / 2 - LEDGE_MARGIN_MM))
+
+
 def port_cutout(fits: Fits, shell: Shell, compute: Compute) -> Bounds:
     """The rear wall's window onto the Orin's ports: a notch open at the split, so the tray prints
     without bridging it (a closed window is a ~110 mm bridge, beyond any printer's ``max_bridge_mm``);
@@ -116,45 +132,159 @@ def port_cutout(fits: Fits, shell: Shell, compute: Compute) -> Bounds:
 
 def place_vents(rig: Rig, c: Constants, fits: Fits, shell: Shell, lugs, cameras: Cameras, fans: dict[str, Fan],
                 compute: Compute, converter_box: Bounds) -> tuple[Bounds, ...]:
-    """Vertical slots in the lower side walls beside the fans and the computer, clear of lugs and the
-    converter, and exhaust slots in the front wall ahead of each fin bank, outside the window cone."""
+    """Every vent slot (cad/airflow.py checks each air path's free area against its fan):
+
+    - the blowers' intakes: vertical slots in the tray's side walls beside each fan;
+    - the devkit's exhaust: vertical slots in the tray's side walls beside it, floor to split, and
+      horizontal ones in the lid's side walls between the side handle's pads (its heat sink blows out
+      of its +-y faces, an estimate: ``parts.jetson_agx_orin.dims``);
+    - the devkit's intake: slots along x in the roof beside the capture card, over the devkit's fan;
+    - each blower's exhaust: slots in the front wall beside the Boson's window, floor to split, and
+      vertical slots in the side wall beside the fin bank, until the free area reaches
+      ``min_area_ratio`` x the fan's outlet.
+
+    No slot is wider than ``slot_width_mm`` or longer than ``slot_length_mm``: a longer run is
+    ``segments`` with a two-minimum-wall rib between.
+
+    Every slot in the lid runs along x, the lid's print direction (it prints on its rear face), so its
+    top in the print is a ``slot_width_mm`` bridge; every slot in the tray is vertical for the same reason."""
     v = rig.desc.enclosure.vents
-    o, i, split_z, wall, run = shell.outer, shell.interior, shell.split_z, fits.wall, VENT_CUT_OVERRUN_MM
-    z_mid = (i.lo[2] + split_z) / 2
-    zlen = min(v.slot_length_mm, split_z - i.lo[2] - 2 * wall)
     pitch = v.slot_width_mm + max(fits.min_wall * 2, v.slot_width_mm)
     keep_out: dict[float, list[tuple[float, float]]] = {1.0: [], -1.0: []}
     for x, s in lugs:
-        keep_out[s].append((x - c.lug_width_mm / 2 - wall, x + c.lug_width_mm / 2 + wall))
-    keep_out[-1.0].append((converter_box.lo[0] - wall, converter_box.hi[0] + wall))
-    zones = [(f.box.lo[0], f.box.hi[0]) for f in fans.values()] + [(compute.orin_box.lo[0], compute.orin_box.hi[0])]
+        keep_out[s].append((x - c.lug_width_mm / 2 - fits.wall, x + c.lug_width_mm / 2 + fits.wall))
+    keep_out[-1.0].append((converter_box.lo[0] - fits.wall, converter_box.hi[0] + fits.wall))
+    vents = _side_slots(rig, fits, shell, pitch, keep_out, fans, compute)
+    vents += _lid_side_slots(rig, c, fits, shell, pitch, compute)
+    vents += _roof_slots(rig, fits, shell, pitch, compute)
+    for f in fans.values():
+        vents += _blower_exhaust(rig, c, fits, shell, pitch, lugs, converter_box, cameras, f)
+    return tuple(vents)
+
+
+def segments(lo: float, hi: float, max_len: float, rib: float) -> list[tuple[float, float]]:
+    """[lo, hi] split into the fewest equal segments of at most ``max_len`` (``slot_length_mm``: no slot
+    is longer) with a ``rib`` between each two."""
+    n = max(1, math.ceil((hi - lo + rib) / (max_len + rib) - 1e-9))
+    seg = (hi - lo - (n - 1) * rib) / n
+    return [(lo + k * (seg + rib), lo + k * (seg + rib) + seg) for k in range(n)]
+
+
+def _side_slots(rig: Rig, fits: Fits, shell: Shell, pitch: float, keep_out, fans: dict[str, Fan],
+                compute: Compute) -> list[Bounds]:
+    """Vertical slots in the tray's side walls beside the fans (``slot_length_mm`` tall, the fan's
+    inlet) and beside the devkit (floor to split in ``segments``: its exhaust), clear of the lugs and
+    the converter."""
+    v = rig.desc.enclosure.vents
+    o, i, split_z, wall, run = shell.outer, shell.interior, shell.split_z, fits.wall, VENT_CUT_OVERRUN_MM
+    z_mid = (i.lo[2] + split_z) / 2
+    full = split_z - i.lo[2] - 2 * wall
+    fan_zl = min(v.slot_length_mm, full)
+    zones = [(f.box.lo[0], f.box.hi[0], [(z_mid - fan_zl / 2, z_mid + fan_zl / 2)]) for f in fans.values()]
+    zones.append((compute.orin_box.lo[0], compute.orin_box.hi[0],
+                  segments(i.lo[2] + wall, split_z - wall, v.slot_length_mm, 2 * fits.min_wall)))
     vents = []
     for s in (1.0, -1.0):
         x = i.lo[0] + wall + v.slot_width_mm
         while x < i.hi[0] - wall - v.slot_width_mm:
             x0, x1 = x - v.slot_width_mm / 2, x + v.slot_width_mm / 2
-            if any(a <= x0 and x1 <= bb for a, bb in zones) and not any(x1 > a and x0 < bb for a, bb in keep_out[s]):
+            zs = next((zl for a, bb, zl in zones if a <= x0 and x1 <= bb), None)
+            if zs is not None and not any(x1 > a and x0 < bb for a, bb in keep_out[s]):
                 y0, y1 = (i.hi[1] - run, o.hi[1] + run) if s > 0 else (o.lo[1] - run, i.lo[1] + run)
-                vents.append(Bounds((x0, y0, z_mid - zlen / 2), (x1, y1, z_mid + zlen / 2)))
+                vents += [Bounds((x0, y0, za), (x1, y1, zb)) for za, zb in zs]
             x += pitch
+    return vents
+
+
+def side_pad_free_x(rig: Rig, c: Constants, shell: Shell) -> tuple[float, float]:
+    """The x range of the lid's side walls between a side handle's two foot pads, a wall clear of them
+    (the pads' extent as cad/layout/handles.py places them: feet at the grip's ends, each a post and
+    its flange wide, grown by ``PAD_MARGIN_MM``)."""
+    h = rig.desc.enclosure.handles
+    x_mid = (shell.outer.lo[0] + shell.outer.hi[0]) / 2
+    if not h.sides:
+        return shell.interior.lo[0], shell.interior.hi[0]
+    half = h.grip_length_mm / 2 - c.handle_post_width_mm - c.handle_flange_mm - PAD_MARGIN_MM - rig.desc.enclosure.wall_mm
+    return x_mid - half, x_mid + half
+
+
+def _lid_side_slots(rig: Rig, c: Constants, fits: Fits, shell: Shell, pitch: float, compute: Compute) -> list[Bounds]:
+    """Slots along x in the lid's side walls beside the devkit (its exhaust), between the side handle's
+    pads and above the split's lugs and their gussets."""
+    v = rig.desc.enclosure.vents
+    o, i, wall, run = shell.outer, shell.interior, fits.wall, VENT_CUT_OVERRUN_MM
+    lo, hi = side_pad_free_x(rig, c, shell)
+    x0, x1 = max(lo, compute.orin_box.lo[0]), min(hi, compute.orin_box.hi[0])
+    if x1 - x0 < v.slot_width_mm:
+        return []
+    z = shell.split_z + c.lid_lug_mm + c.lug_protrusion_mm + wall + v.slot_width_mm / 2
+    vents = []
+    while z + v.slot_width_mm / 2 <= i.hi[2] - wall:
+        for s in (1.0, -1.0):
+            y0, y1 = (i.hi[1] - run, o.hi[1] + run) if s > 0 else (o.lo[1] - run, i.lo[1] + run)
+            vents += [Bounds((xa, y0, z - v.slot_width_mm / 2), (xb, y1, z + v.slot_width_mm / 2))
+                      for xa, xb in segments(x0, x1, v.slot_length_mm, 2 * fits.min_wall)]
+        z += pitch
+    return vents
+
+
+def _roof_slots(rig: Rig, fits: Fits, shell: Shell, pitch: float, compute: Compute) -> list[Bounds]:
+    """Slots along x in the roof over the devkit, beside the capture card (whose edges the devkit's fan
+    draws its air round): from the card's edge to ``ROOF_BEYOND_ORIN_MM`` past the devkit's side (the
+    antennas stand further out), in segments of at most ``slot_length_mm`` with a two-minimum-wall rib
+    between."""
+    v = rig.desc.enclosure.vents
+    i, o, b, run = shell.interior, shell.outer, compute.orin_box, VENT_CUT_OVERRUN_MM
+    y_in = compute.card_box.hi[1] + fits.clear + v.slot_width_mm / 2
+    y_out = b.hi[1] + fits.clear + ROOF_BEYOND_ORIN_MM - v.slot_width_mm / 2
+    # the ribs across the slots only tie the roof's strips between two rows: two minimum walls
+    segs = segments(max(b.lo[0], i.lo[0] + fits.wall), b.hi[0], v.slot_length_mm, 2 * fits.min_wall)
+    vents = []
+    y = y_in
+    while y <= y_out + 1e-9:
+        for s in (1.0, -1.0):
+            vents += [Bounds((xa, s * y - v.slot_width_mm / 2, i.hi[2] - run), (xb, s * y + v.slot_width_mm / 2, o.hi[2] + run))
+                      for xa, xb in segs]
+        y += pitch
+    return vents
+
+
+def _blower_exhaust(rig: Rig, c: Constants, fits: Fits, shell: Shell, pitch: float, lugs, converter_box: Bounds,
+                    cameras: Cameras, f: Fan) -> list[Bounds]:
+    """One blower's exhaust, sized to its outlet: the front wall's slot outboard of the Boson's window
+    (at the outer edge of the front's flat there, floor to split in ``segments``), then vertical slots in the
+    side wall beside the fin bank, ahead of the fan, until the free area reaches ``min_area_ratio`` x
+    the outlet's area (``BlowerFan.outlet``)."""
+    v = rig.desc.enclosure.vents
+    o, i, split_z, wall, run = shell.outer, shell.interior, shell.split_z, fits.wall, VENT_CUT_OVERRUN_MM
+    t = next(t for t in cameras.thermal.values() if t.sign == f.sign)
+    need = v.min_area_ratio * f.outlet_area_mm2
     half = fov_half_angles_deg(rig)["thermal"][0] + c.fov_margin_deg
-    for t in cameras.thermal.values():
-        cam = t.pose.t
-        r_win = (o.hi[0] - cam[0]) * math.tan(math.radians(half))
-        lens_r = cameras.lens.diameter_mm / 2 + fits.clear
-        r_win = max(r_win, lens_r)
-        y, last, outermost = t.fin_bank.centre[1], None, False
-        # the slots stay on the front's flat, a minimum wall short of where its corner radius begins (a slot
-        # into the radius left a 0.47 mm sliver between its side and the rounded face: the wall check)
-        y_max = min(o.hi[1] - rig.desc.enclosure.corner_radius_mm, i.hi[1]) - fits.min_wall - v.slot_width_mm / 2
-        while not outermost:
-            if abs(y) >= y_max:
-                y, outermost = t.sign * y_max, True
-            clear_of_last = last is None or abs(y - last) >= pitch
-            if abs(y - cam[1]) - v.slot_width_mm / 2 >= r_win + fits.min_wall and clear_of_last:
-                zl = min(v.slot_length_mm, t.fin_bank.size[2])
-                vents.append(Bounds((i.hi[0] - run, y - v.slot_width_mm / 2, t.fin_bank.centre[2] - zl / 2),
-                                    (o.hi[0] + run, y + v.slot_width_mm / 2, t.fin_bank.centre[2] + zl / 2)))
-                last = y
-            y += t.sign * pitch
-    return tuple(vents)
+    r_win = max((o.hi[0] - t.pose.t[0]) * math.tan(math.radians(half)), cameras.lens.diameter_mm / 2 + fits.clear)
+    # the slot stays on the front's flat, a minimum wall short of where its corner radius begins (a slot
+    # into the radius left a 0.47 mm sliver between its side and the rounded face: the wall check)
+    y_out = min(o.hi[1] - rig.desc.enclosure.corner_radius_mm, i.hi[1]) - fits.min_wall
+    y_in = abs(t.pose.t[1]) + r_win + fits.min_wall
+    z0, z1 = i.lo[2] + wall, split_z - wall
+    vents, have = [], 0.0
+    if y_out - y_in >= v.slot_width_mm:
+        ya, yb = sorted((f.sign * (y_out - v.slot_width_mm), f.sign * y_out))
+        for za, zb in segments(z0, z1, v.slot_length_mm, 2 * fits.min_wall):
+            vents.append(Bounds((i.hi[0] - run, ya, za), (o.hi[0] + run, yb, zb)))
+            have += v.slot_width_mm * (zb - za)
+    # beside the fin bank (its fins are open outboard), from its front backwards, a wall clear of the
+    # lugs (which stand higher up the wall than the fin bank: their boxes, not just their x range)
+    y0, y1 = (i.hi[1] - run, o.hi[1] + run) if f.sign > 0 else (o.lo[1] - run, i.lo[1] + run)
+    za, zb = t.fin_bank.lo[2], t.fin_bank.hi[2]
+    blocked = [lug_bounds(shell, c, fits, x, s).grown(wall) for x, s in lugs if s == f.sign] + [converter_box.grown(wall)]
+    x = t.fin_bank.hi[0] - v.slot_width_mm / 2
+    while have < need - 1e-9 and x - v.slot_width_mm / 2 >= t.fin_bank.lo[0] - 1e-9:
+        slot = Bounds((x - v.slot_width_mm / 2, y0, za), (x + v.slot_width_mm / 2, y1, zb))
+        # a lug above: the slot stops a wall under it
+        top = min([b.lo[2] for b in blocked if slot.overlaps(b) and b.lo[2] > za + v.slot_width_mm] + [zb])
+        slot = Bounds(slot.lo, (slot.hi[0], slot.hi[1], top))
+        if not any(slot.overlaps(b) for b in blocked):
+            vents.append(slot)
+            have += v.slot_width_mm * (top - za)
+        x -= pitch
+    return vents

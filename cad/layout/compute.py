@@ -1,5 +1,6 @@
 """The computer behind the cameras: the Jetson AGX Orin on printed standoffs, its port panel facing
-the rear wall, and the ZED Link Quad capture card above it. Rig frame, mm."""
+the rear wall, and the ZED Link Quad capture card above it, high enough over the devkit's own fan
+inlet (its top face) for the fan to draw air in round the card's edges. Rig frame, mm."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -28,12 +29,25 @@ class Compute:
     card: ZedLinkQuad
     card_pose: Pose
     card_box: Bounds
+    fan_diameter: float = 0.0   # the devkit's own fan, drawing from its top face (parts.jetson_agx_orin.dims)
+    fan_hub: float = 0.0
+    card_gap: float = 0.0       # the devkit's top to the card's underside: the fan inlet's clear height
+
+
+def fan_inlet_gap_mm(rig: Rig, fits: Fits) -> float:
+    """The clear height the devkit's fan needs over its inlet: ``inlet_gap_ratio`` x its diameter
+    (D/4: the ring of air pi D h entering round the fan's rim is then its disc pi D^2 / 4), never less
+    than the component clearance."""
+    orin = part_of_kind(rig, "computer")
+    return max(fits.clear, rig.desc.enclosure.vents.inlet_gap_ratio * rig.dim(orin, "fan_diameter_mm"))
 
 
 def place_compute(rig: Rig, c: Constants, fits: Fits, cameras: Cameras, mounts: CameraMounts,
                   plates: dict[str, FanPlate]) -> Compute:
     """The Orin right behind the rearmost camera part (ZED X, its mount, the fan plates), standing on
-    standoffs tall enough for the floor screws' heads; the capture card on top of it."""
+    standoffs tall enough for the floor screws' heads; the capture card over it, ``fan_inlet_gap_mm``
+    above its top (it stood 1 mm above it, on the fan's inlet; its fixings are not modelled), flush
+    with its rear face."""
     clear = fits.clear
     orin = JetsonOrin.from_rig(rig, part_of_kind(rig, "computer"))
     cam_back = min([cameras.zed_box.lo[0] - clear, mounts.zed_foot.lo[0] - clear]
@@ -42,6 +56,11 @@ def place_compute(rig: Rig, c: Constants, fits: Fits, cameras: Cameras, mounts: 
     orin_pose = pose_xyz(cam_back - orin.size[0] / 2, 0.0, mounts.floor_z + standoff_h)
     orin_box = placed_bounds(orin.bounds(), orin_pose)
     card = ZedLinkQuad.from_rig(rig, rig.desc.sync.source_part)
-    card_pose = pose_xyz(orin_pose.t[0], 0.0, orin_box.hi[2] + clear)
+    gap = fan_inlet_gap_mm(rig, fits)
+    # flush with the devkit's rear: raised over the fan, its front socket needs the room ahead of it for
+    # the GMSL2 coax's S-bend up from the ZED X (centred on the devkit, the bend did not fit: cad/cables.py)
+    card_pose = pose_xyz(orin_box.lo[0] + card.size[0] / 2, 0.0, orin_box.hi[2] + gap)
     return Compute(orin=orin, orin_pose=orin_pose, orin_box=orin_box, standoff_h=standoff_h, card=card,
-                   card_pose=card_pose, card_box=placed_bounds(card.bounds(), card_pose))
+                   card_pose=card_pose, card_box=placed_bounds(card.bounds(), card_pose),
+                   fan_diameter=rig.dim(orin.part_id, "fan_diameter_mm"),
+                   fan_hub=rig.dim(orin.part_id, "fan_hub_diameter_mm"), card_gap=gap)

@@ -35,6 +35,7 @@ class Fan:
     box: Bounds                 # the fan's envelope, rig frame
     duct_in: Bounds             # the fan outlet face
     duct_out: Bounds            # the fin bank entry face
+    outlet_area_mm2: float = 0.0   # the fan's outlet opening (BlowerFan.outlet): what its exhaust must pass
 
 
 @dataclass(frozen=True)
@@ -72,7 +73,8 @@ def place_fans(rig: Rig, c: Constants, fits: Fits, cameras: Cameras) -> tuple[Bl
         fans[side] = Fan(side=side, sign=s, pose=pose, box=box,
                          duct_in=Bounds((box.hi[0], out_box.lo[1], out_box.lo[2]),
                                         (box.hi[0] + DUCT_FACE_MM, out_box.hi[1], out_box.hi[2])),
-                         duct_out=Bounds((x_hs - DUCT_FACE_MM, fin.lo[1], fin.lo[2]), (x_hs, fin.hi[1], fin.hi[2])))
+                         duct_out=Bounds((x_hs - DUCT_FACE_MM, fin.lo[1], fin.lo[2]), (x_hs, fin.hi[1], fin.hi[2])),
+                         outlet_area_mm2=out_local.size[1] * out_local.size[2])
     return part, fans
 
 

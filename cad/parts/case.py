@@ -16,7 +16,7 @@ import cadquery as cq
 import numpy as np
 
 from ..layout import Hole, Layout, fov_half_angles_deg
-from ..layout.case import lug_spot_face
+from ..layout.case import front_ledge_chamfer, lug_spot_face
 from ..layout.constants import HOLE_LEAD_MM
 from ..geom import Bounds, box, cylinder, moved
 from .common import PrintSetup, hole_tools
@@ -52,6 +52,9 @@ class CaseSpec:
     cones: tuple[ConeCut, ...]                     # camera windows
     panel_cuts: tuple[tuple[object, tuple], ...]   # (PanelPart, pose matrix rows)
     holes: tuple[Hole, ...]
+    #: 45 deg chamfers under the roof behind the front wall: (x of the front's inner face, z of the roof's
+    #: inner face, size, y0, y1), so the lid's front ledge prints (cad/layout/case.py front_ledge_chamfer)
+    chamfers: tuple[tuple[float, float, float, float, float], ...] = ()
 
     def build_shell(self) -> cq.Shape:
         o, w = self.outer, self.wall
@@ -66,8 +69,18 @@ class CaseSpec:
         adds = [self._lug(x, s, lower) for x, s in self.lugs for lower in (True, False)]
         adds += [box(p) for p in self.pads]
         adds += [cylinder(d, h + BOSS_FUSE_MM, (x, y, z0 - BOSS_FUSE_MM)) for x, y, z0, d, h in self.bosses]
+        adds += [self._chamfer(*ch) for ch in self.chamfers]
         shell = shell.fuse(*adds).clean()
         return shell.cut(*self._cutters()).clean()
+
+    @staticmethod
+    def _chamfer(x: float, z: float, size: float, y0: float, y1: float) -> cq.Shape:
+        """A 45 deg wedge in the corner of the front wall's inner face (x) and the roof's (z), running
+        ``BOSS_FUSE_MM`` into both so they fuse."""
+        f = BOSS_FUSE_MM
+        pts = [cq.Vector(x + f, y0, z + f), cq.Vector(x + f, y0, z - size), cq.Vector(x - size, y0, z + f)]
+        face = cq.Face.makeFromWires(cq.Wire.makePolygon(pts, close=True))
+        return cq.Solid.extrudeLinear(face, cq.Vector(0, y1 - y0, 0))
 
     def _lug(self, x: float, s: float, lower: bool) -> cq.Shape:
         o, p, w = self.outer, self.lug_protrusion, self.lug_width
@@ -146,9 +159,12 @@ def case_spec(lay: Layout) -> CaseSpec:
     holes += (Hole("case_lower", (gx, gy, gz - HOLE_LEAD_MM), (0.0, 0.0, 1.0), gd, lay.fits.wall + 2 * HOLE_LEAD_MM),)
     floor = lay.case.interior.lo[2]
     bosses = tuple((x, y, floor, d, h) for x, y, d, h in lay.power.cutoff_bosses)
+    i = lay.case.interior
+    ch = front_ledge_chamfer(lay.rig, lay.fits, lay.case, lay.cameras)
+    chamfers = ((i.hi[0], i.hi[2], ch, i.lo[1], i.hi[1]),) if ch > 0 else ()
     return CaseSpec(lay.case.outer, lay.fits.wall, lay.rig.desc.enclosure.corner_radius_mm, lay.case.split_z, c.lug_width_mm,
                     c.lug_protrusion_mm, lay.fits.insert_plate_mm, c.lid_lug_mm, tuple(lay.case.lugs),
-                    tuple(lay.handles.pads), bosses, tuple(boxes), tuple(cones), panel, holes)
+                    tuple(lay.handles.pads), bosses, tuple(boxes), tuple(cones), panel, holes, chamfers)
 
 
 PRINT = {

@@ -288,8 +288,10 @@ class HeatSink:
 class Vents:
     slot_width_mm: PosMm
     slot_length_mm: PosMm
-    #: vent open area as a multiple of the fans' inlet area (at least 1)
+    #: vent open area as a multiple of the fans' inlet area (at least 1); per air path, of its fan's free area
     min_area_ratio: Annotated[float, Ge(1)]
+    #: clear height over a fan's inlet as a fraction of its diameter (h >= D/4: the ring pi D h = the disc pi D^2/4)
+    inlet_gap_ratio: Annotated[float, Gt(0), Le(1)] = 0.25
 
 
 @dataclass(frozen=True)

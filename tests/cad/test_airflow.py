@@ -1,0 +1,247 @@
+"""The air paths through the case (cad/airflow.py, issue 16 item 6): each path's free area against its
+fan's need, on the B-rep and on the exported STL, and the clear height over the devkit's fan.
+
+The independent paths here: meshes made by trimesh (not by OpenCascade) for the ray caster's own
+test, and the exported case STL read by trimesh's reader and cast through by trimesh's ray caster,
+against the check's B-rep figure."""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from cad.airflow import (AGREE_ABS_MM2, AGREE_REL, Window, _wall_axis, air_paths, first_hits, stl_free_area_mm2)
+from cad.geom import Bounds
+
+trimesh = pytest.importorskip("trimesh")
+
+
+def _tri(*meshes) -> np.ndarray:
+    return np.concatenate([m.triangles for m in meshes])
+
+
+def _plate_with_slot(gap: float, length: float = 20.0, wall: float = 2.0):
+    """Two trimesh boxes a ``gap`` apart in y (a slot through a wall whose normal is z), ``length`` in x."""
+    a = trimesh.creation.box((length, 10.0, wall), trimesh.transformations.translation_matrix((0, -5 - gap / 2, 0)))
+    b = trimesh.creation.box((length, 10.0, wall), trimesh.transformations.translation_matrix((0, 5 + gap / 2, 0)))
+    return a, b
+
+
+def _slot_window(gap: float, length: float = 20.0, wall: float = 2.0, step: float = 0.25) -> Window:
+    return Window(Bounds((-length / 2 + step, -gap / 2 - step, -wall / 2), (length / 2 - step, gap / 2 + step, wall / 2)), 2,
+                  (step, step))
+
+
+def test_rays_through_a_slot_in_a_trimesh_plate_measure_its_area():
+    tri = _tri(*_plate_with_slot(3.0))
+    free, rays = stl_free_area_mm2(tri, (_slot_window(3.0),))
+    assert free == pytest.approx(3.0 * 19.5, rel=1e-9)      # the window's length (20 - 2 x 0.25) x the slot's 3 mm
+    assert rays == 78 * 14
+
+
+def test_a_closed_plate_lets_nothing_through_and_a_ray_beside_it_passes():
+    plate = trimesh.creation.box((20.0, 20.0, 2.0))
+    tri = plate.triangles
+    free, _ = stl_free_area_mm2(tri, (_slot_window(3.0),))
+    assert free == 0.0
+    # first_hits gives the plate's lower face for rays that meet it, inf beside it
+    hits = first_hits(tri, 2, np.array([[0.0, 0.0], [15.0, 0.0], [9.9, -9.9]]), -5.0, 5.0)
+    assert hits[0] == pytest.approx(-1.0) and math.isinf(hits[1]) and hits[2] == pytest.approx(-1.0)
+
+
+def test_a_slot_blocked_behind_the_wall_is_seen_by_the_rays():
+    a, b = _plate_with_slot(3.0)
+    # a bar 1 mm wide across the slot, just above the wall: inside the rays' overrun (0.5 mm)
+    bar = trimesh.creation.box((20.0, 1.0, 0.4), trimesh.transformations.translation_matrix((0, 0, 1.2)))
+    free, _ = stl_free_area_mm2(_tri(a, b, bar), (_slot_window(3.0),))
+    assert free == pytest.approx(2.0 * 19.5, abs=0.25 * 19.5)
+
+
+def test_slots_are_assigned_to_the_wall_they_cross():
+    outer = Bounds((-100, -50, -40), (10, 50, 30))
+    assert _wall_axis(Bounds((9, 20, -10), (11, 23, 0)), outer) == 0
+    assert _wall_axis(Bounds((-50, 49, -10), (-47, 51, 0)), outer) == 1
+    assert _wall_axis(Bounds((-50, -51, -10), (-47, -49, 0)), outer) == 1
+    assert _wall_axis(Bounds((-50, 20, 29), (-20, 23, 31)), outer) == 2
+    assert _wall_axis(Bounds((-101, 20, 0), (-99, 23, 5)), outer) is None      # the rear wall: no path uses it
+
+
+@pytest.fixture(scope="module")
+def lay(rig):
+    from cad.layout import layout
+    return layout(rig)
+
+
+def test_every_path_has_slots_and_needs_what_its_fan_asks(lay, rig):
+    paths = {p.name: p for p in air_paths(lay)}
+    assert set(paths) == {"blower_left_exhaust", "blower_right_exhaust", "orin_intake", "orin_exhaust"}
+    ratio = rig.desc.enclosure.vents.min_area_ratio
+    outlet = rig.dim("fan_3010_5v", "outlet_width_mm") * rig.dim("fan_3010_5v", "outlet_height_mm")
+    assert paths["blower_left_exhaust"].need_mm2 == pytest.approx(ratio * outlet)      # 1.5 x 21 x 8.3 mm
+    d, hub = rig.dim("jetson_agx_orin", "fan_diameter_mm"), rig.dim("jetson_agx_orin", "fan_hub_diameter_mm")
+    assert paths["orin_intake"].need_mm2 == pytest.approx(ratio * math.pi / 4 * (d * d - hub * hub))
+    assert all(p.windows for p in paths.values())
+    assert all(w.axis == 2 for w in paths["orin_intake"].windows)
+    assert {w.axis for w in paths["blower_left_exhaust"].windows} == {0, 1}
+
+
+def test_the_card_stands_the_rule_s_height_over_the_devkit(lay, rig):
+    gap = lay.compute.card_box.lo[2] - lay.compute.orin_box.hi[2]
+    assert gap == pytest.approx(rig.desc.enclosure.vents.inlet_gap_ratio * rig.dim("jetson_agx_orin", "fan_diameter_mm"))
+    assert gap >= 60 / 4 - 1e-9
+
+
+def test_vents_miss_the_pads_lugs_and_controls_and_print_along_their_bridges(lay):
+    from cad.layout.case import lug_bounds
+    case = lay.case
+    blockers = list(lay.handles.pads) + [lug_bounds(case, lay.c, lay.fits, x, s) for x, s in case.lugs]
+    for name, (part, pose) in lay.controls.items():
+        c = np.asarray(pose.t)
+        r = max(part.cutout_mm) / 2 + lay.fits.min_wall
+        blockers.append(Bounds(tuple(c - r), tuple(c + r)))
+    v_rig = lay.rig.desc.enclosure.vents
+    for v in case.vents:
+        plane = sorted(v.size[k] for k in range(3) if k != _wall_axis(v, case.outer))
+        assert plane[0] <= v_rig.slot_width_mm + 1e-9 and plane[1] <= v_rig.slot_length_mm + 1e-9, v
+        for b in blockers:
+            assert not v.overlaps(b), (v, b)
+        axis = _wall_axis(v, case.outer)
+        if v.hi[2] > case.split_z + 1e-6 and axis in (1, 2):   # in the lid: long along x, its print direction
+            assert v.size[0] > v.size[2 if axis == 1 else 1], v
+        elif axis == 1:                                          # in the tray: vertical
+            assert v.size[2] > v.size[0], v
+
+
+@pytest.mark.slow
+def test_the_default_rig_passes_and_both_measurements_agree(results, asm):
+    r = results["airflow"]
+    assert r.ok, r.details
+    for name in ("blower_left_exhaust", "blower_right_exhaust", "orin_intake", "orin_exhaust"):
+        d = r.data[name]
+        assert d["brep_mm2"] >= d["need_mm2"] and d["stl_mm2"] >= d["need_mm2"], (name, d)
+        assert abs(d["brep_mm2"] - d["stl_mm2"]) <= AGREE_REL * d["brep_mm2"] + AGREE_ABS_MM2 * d["slots"]
+    g = r.data["orin_inlet_gap"]
+    assert g["nearest"] == "zed_link_quad"
+    assert g["brep_mm"] == pytest.approx(15.0, abs=1e-3) and g["stl_mm"] == pytest.approx(15.0, abs=0.01)
+
+
+def _with_case_boxes(asm, drop):
+    from cad.assembly import Assembly
+    nodes = []
+    for n in asm.nodes:
+        if n.name in ("case_lower", "case_lid"):
+            spec = dataclasses.replace(n.spec.spec, boxes=tuple(b for b in n.spec.spec.boxes if b not in drop))
+            n = dataclasses.replace(n, spec=dataclasses.replace(n.spec, spec=spec), _shape=None)
+        nodes.append(n)
+    return Assembly(asm.rig, asm.layout, nodes, asm.cache)
+
+
+@pytest.mark.slow
+def test_a_roof_without_its_slots_fails_naming_the_devkit_intake(asm):
+    from cad import checks
+    roof = {v for v in asm.layout.case.vents if _wall_axis(v, asm.layout.case.outer) == 2}
+    r = checks.check_airflow(_with_case_boxes(asm, roof))
+    assert not r.ok
+    assert r.data["orin_intake"]["brep_mm2"] == pytest.approx(0.0, abs=1.0)
+    assert r.data["orin_intake"]["stl_mm2"] == pytest.approx(0.0, abs=1.0)
+    bad = [d for d in r.details if "free through" in d and "under" in d]
+    assert [d.split(":")[0] for d in bad] == ["orin_intake"]
+    assert r.data["orin_exhaust"]["brep_mm2"] >= r.data["orin_exhaust"]["need_mm2"]   # the other paths untouched
+
+
+@pytest.mark.slow
+def test_one_front_slot_filled_fails_that_blower_only(asm):
+    from cad import checks
+    front = {v for v in asm.layout.case.vents if _wall_axis(v, asm.layout.case.outer) == 0 and v.centre[1] > 0}
+    r = checks.check_airflow(_with_case_boxes(asm, front))
+    assert not r.ok
+    problems = [d for d in r.details if "under" in d and "free through" in d]
+    assert [d.split(":")[0] for d in problems] == ["blower_left_exhaust"]
+    # what is left is the two side slots beside the fin bank, 3 x 23.5 mm each (a wall under the front lug)
+    assert r.data["blower_left_exhaust"]["brep_mm2"] == pytest.approx(2 * 3.0 * 23.5, abs=0.5)
+    assert r.data["blower_left_exhaust"]["stl_mm2"] == pytest.approx(2 * 3.0 * 23.5, abs=0.5)
+
+
+@pytest.mark.slow
+def test_the_card_lowered_back_to_1_mm_fails_naming_the_intake_and_the_card(asm):
+    from cad import checks
+    from cad.assembly import Assembly
+    from platform_tools.rig.frames import Pose
+    orin_top = asm.layout.compute.orin_box.hi[2]
+    nodes = [dataclasses.replace(n, pose=Pose(n.pose.R, (n.pose.t[0], n.pose.t[1], orin_top + 1.0)), _shape=None)
+             if n.name == "zed_link_quad" else n for n in asm.nodes]
+    r = checks.check_airflow(Assembly(asm.rig, asm.layout, nodes, asm.cache))
+    assert not r.ok
+    line = next(d for d in r.details if "over the devkit's fan inlet" in d)
+    assert line.startswith("orin_intake: zed_link_quad is 1.0 mm over")
+    assert r.data["orin_inlet_gap"]["brep_mm"] == pytest.approx(1.0, abs=1e-3)
+    assert r.data["orin_inlet_gap"]["stl_mm"] == pytest.approx(1.0, abs=0.01)
+
+
+class _Boxes:
+    """The broad phase trimesh's ray_triangle_id asks of an r-tree (rtree is not installed)."""
+
+    def __init__(self, tri: np.ndarray):
+        self.lo, self.hi = tri.min(axis=1), tri.max(axis=1)
+        self.bounds = np.concatenate([self.lo.min(axis=0), self.hi.max(axis=0)])
+
+    def intersection(self, b):
+        b = np.asarray(b)
+        return np.flatnonzero(np.all(self.lo <= b[3:], axis=1) & np.all(self.hi >= b[:3], axis=1))
+
+
+@pytest.mark.slow
+def test_trimesh_reading_the_exported_lid_finds_the_b_rep_s_roof_area(asm, tmp_path):
+    """The lid exported to STL, read by trimesh, cast through by trimesh's ray caster on a grid of its
+    own (0.2 mm, not aligned with the slots), over the roof's two inner rows of slots on the left: their
+    free area equals the B-rep's within the grid's edge error (half a cell along every slot edge)."""
+    import cadquery as cq
+    from trimesh.ray.ray_triangle import ray_triangle_id
+    from cad.airflow import brep_free_area_mm2
+    path = tmp_path / "case_lid.stl"
+    lid = asm.node("case_lid").shape(asm.cache)
+    cq.exporters.export(lid, str(path), "STL", tolerance=0.1, angularTolerance=0.2)
+    mesh = trimesh.load(str(path), process=False)
+    intake = next(p for p in air_paths(asm.layout) if p.name == "orin_intake")
+    rows = sorted({round(w.box.centre[1], 3) for w in intake.windows if w.box.centre[1] > 0})[:2]
+    windows = tuple(w for w in intake.windows if round(w.box.centre[1], 3) in rows)
+    assert len(windows) == 8
+    lo = np.min([w.box.lo for w in windows], axis=0)
+    hi = np.max([w.box.hi for w in windows], axis=0)
+    # only the triangles over these slots reach the ray caster (a broad phase; trimesh does the rest)
+    near = np.all(mesh.triangles.max(axis=1) >= lo - 1.0, axis=1) & np.all(mesh.triangles.min(axis=1) <= hi + 1.0, axis=1)
+    tri, normals = np.asarray(mesh.triangles)[near], np.asarray(mesh.face_normals)[near]
+    pitch = 0.2
+    xs, ys = np.arange(lo[0] + pitch / 2, hi[0], pitch), np.arange(lo[1] + pitch / 2, hi[1], pitch)
+    xx, yy = np.meshgrid(xs, ys, indexing="ij")
+    inside = np.zeros(xx.shape, bool)
+    for w in windows:
+        inside |= (xx >= w.box.lo[0]) & (xx < w.box.hi[0]) & (yy >= w.box.lo[1]) & (yy < w.box.hi[1])
+    pts = np.column_stack([xx[inside], yy[inside]])
+    origins = np.column_stack([pts, np.full(len(pts), lo[2] - 1.0)])
+    dirs = np.tile([0.0, 0.0, 1.0], (len(pts), 1))
+    _, ray, loc = ray_triangle_id(tri, origins, dirs, triangles_normal=normals, tree=_Boxes(tri), multiple_hits=True)
+    stopped = np.zeros(len(pts), bool)
+    stopped[ray[loc[:, 2] <= hi[2] + 1.0]] = True
+    free = float((~stopped).sum()) * pitch * pitch
+    brep = brep_free_area_mm2([lid], windows)
+    edge = sum(2 * (w.box.size[0] + w.box.size[1]) for w in windows) * pitch / 2
+    # the built lid has exactly the slots the windows were grown from (one cell each side), 3 mm wide
+    slots = sum((w.box.size[0] - 2 * w.step[0]) * (w.box.size[1] - 2 * w.step[1]) for w in windows)
+    assert all(w.box.size[1] - 2 * w.step[1] == pytest.approx(3.0) for w in windows)
+    assert brep == pytest.approx(slots, rel=1e-3)
+    assert abs(free - brep) <= edge, (free, brep, edge)
+
+
+@pytest.mark.slow
+def test_a_hub_as_wide_as_the_fan_is_one_line_naming_the_key(asm):
+    # a fan with no free ring would need nothing: the check says so instead of passing
+    from cad import checks
+    from cad.assembly import build
+    from platform_tools.rig import load_rig
+    wrong = build(load_rig(overrides=["parts.jetson_agx_orin.dims.fan_hub_diameter_mm.value=70"]), asm.cache)
+    r = checks.check_airflow(wrong)
+    assert not r.ok
+    assert r.details[0].startswith("parts.jetson_agx_orin.dims.fan_hub_diameter_mm: 70 mm, expected 0 to under")
