@@ -18,6 +18,7 @@ from platform_tools.rig import Rig
 
 from .cache import ShapeCache
 from .layout import Layout, layout
+from .layout.boson_clamp import with_boson_clamps
 from .geom import moved
 from .parts import camera_mounts, case, cooling, handle, power_mounts
 
@@ -85,7 +86,7 @@ class Assembly:
 
 def build(rig: Rig, cache: ShapeCache | None = None) -> Assembly:
     """Lay out and place every part. Raises :class:`cad.layout.DesignError` for impossible values."""
-    lay = layout(rig)
+    lay = with_boson_clamps(layout(rig))
     nodes: list[Node] = []
     I = Pose.identity()
 
@@ -105,6 +106,8 @@ def build(rig: Rig, cache: ShapeCache | None = None) -> Assembly:
             lay.power.breakout_poses[side], lay.power.breakout.colour)
         add(f"heat_sink_{side}", hs.part_id, "machined", "cooling", hs, t.pose, COPPER,
             material=rig.desc.enclosure.heat_sink.material)
+        add(f"boson_clamp_{side}", f"boson_clamp_{side}", "printed", "mounts", camera_mounts.retaining_plate(lay, side),
+            t.pose)
         add(f"fan_{side}", lay.cooling.part.part_id, "bought", "cooling", lay.cooling.part, lay.cooling.fans[side].pose,
             lay.cooling.part.colour)
         add(f"fan_mount_{side}", f"fan_mount_{side}", "printed", "cooling", cooling.fan_mount(lay, side))

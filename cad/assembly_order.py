@@ -5,7 +5,8 @@ exactly or by shell pattern, and a node belongs to the first step whose pattern 
 ``docs.guide.steps.load_guide`` applies; a test holds the two to the same answer). At the step that fits
 a screw, its driver (the thread's ``driver`` of the fastener table: a bit, then the handle) must have a
 straight path along the screw's axis, out from the head, clear of every part installed in that step or
-before it. A failure names the screw, its step and the part in the way.
+before it (of that step's own parts only, for a step the guide marks ``bench``: a sub-assembly put
+together off the rig, such as each Boson in its heat sink with its retaining plate). A failure names the screw, its step and the part in the way.
 """
 from __future__ import annotations
 
@@ -34,33 +35,35 @@ TOUCH_MM3 = 0.01
 
 @dataclass(frozen=True)
 class Step:
-    """One step of the guide: its id and the assembly nodes it adds, in assembly order."""
+    """One step of the guide: its id and the assembly nodes it adds, in assembly order; ``bench``: a
+    sub-assembly put together off the rig (its screws are driven clear of its own parts only)."""
     number: int
     id: str
     nodes: tuple[str, ...]
+    bench: bool = False
 
 
-def resolve_steps(names: Sequence[str], specs: Iterable[tuple[str, Sequence[str]]]) -> list[Step]:
-    """The nodes each step adds, from ``(id, patterns)`` in step order: every pattern's matches among
-    ``names`` that no earlier step (or pattern) has claimed."""
+def resolve_steps(names: Sequence[str], specs: Iterable[tuple]) -> list[Step]:
+    """The nodes each step adds, from ``(id, patterns[, bench])`` in step order: every pattern's matches
+    among ``names`` that no earlier step (or pattern) has claimed."""
     claimed: set[str] = set()
     order = {n: k for k, n in enumerate(names)}
     out = []
-    for i, (sid, patterns) in enumerate(specs):
+    for i, (sid, patterns, *rest) in enumerate(specs):
         added = []
         for pat in patterns:
             for m in fnmatch.filter(names, pat):
                 if m not in claimed:
                     claimed.add(m)
                     added.append(m)
-        out.append(Step(i + 1, sid, tuple(sorted(added, key=order.__getitem__))))
+        out.append(Step(i + 1, sid, tuple(sorted(added, key=order.__getitem__)), bool(rest and rest[0])))
     return out
 
 
 def load_steps(names: Sequence[str], path: Path | str = STEPS) -> list[Step]:
     """The guide's steps (``steps[].id`` and ``steps[].nodes``) resolved against the assembly's node names."""
     doc = yaml.safe_load(Path(path).read_text())
-    return resolve_steps(names, [(s["id"], s.get("nodes") or ()) for s in doc["steps"]])
+    return resolve_steps(names, [(s["id"], s.get("nodes") or (), bool(s.get("bench"))) for s in doc["steps"]])
 
 
 def driver_envelope(asm: Assembly, joint_name: str, driver: Driver | None = None) -> tuple[cq.Shape, np.ndarray, np.ndarray]:
@@ -102,7 +105,9 @@ def driver_paths(asm: Assembly, steps: list[Step] | None = None,
         st = step_of.get(screw)
         if st is None:
             continue
-        installed = [n for s in steps if s.number <= st.number for n in s.nodes if n != screw]
+        # on the bench only the sub-assembly's own parts are in the way; in the rig, everything fitted so far
+        installed = [n for s in steps if (s is st if st.bench else s.number <= st.number) for n in s.nodes
+                     if n != screw]
         installed += [name for name, _ in extra]
         env, top, out = driver_envelope(asm, j.name)
         env_box = bounds_of(env)

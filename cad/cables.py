@@ -46,6 +46,9 @@ ORIN_WIFI_Z_MM = 60.0
 FAN_LEAD_RISE_MM = 12.0
 #: the sync branches run along under the ZED's shelf at the breakout's height, from this far behind the ZED
 SYNC_RUN_BEHIND_ZED_MM = 18.0
+#: the Makita dock adapter's lead leaves its side face towards the gland at its mid-height (estimate: the
+#: adapter's lead exit is not in any public text; measure the adapter you buy and move it here)
+ADAPTER_LEAD_EXIT_Z_SHARE = 0.5
 
 
 @dataclass(frozen=True)
@@ -199,7 +202,31 @@ def routes(asm: Assembly) -> list[Route]:
         pts = (tuple(a), (a[0], a[1], z), (a[0], side_y, z))
         out.append(Route(f"pigtail_{name.rsplit('_', 1)[1]}", "ufl_pigtail", "wifi_pigtail", (name, "jetson_agx_orin"),
                          pts, R("ufl_pigtail")))
+    out.append(battery_lead(asm))
     return out
+
+
+def battery_lead(asm: Assembly) -> Route:
+    """The dock adapter's lead, up into the case through the cable gland. The gland must be entered straight
+    along its axis from below (its seal grips the cable over the dome), and the gland stands outboard of
+    the adapter: so the lead leaves the adapter's side towards the gland ``2 R`` ahead of it (R the lead's
+    minimum bend), drops ``2 R`` beside the adapter, runs back under the gland and rises through it (its
+    last bend ends below the dome), and ends ``R`` above the locknut, where it is spliced to the fuse
+    holder's lead (no plug at either end: the adapter's own lead, cut to length)."""
+    lay = asm.layout
+    kind = cable_table().kinds["battery_lead"]
+    R = kind.min_bend_radius_mm
+    g, gp = lay.power.gland, lay.power.gland_pose
+    ad = placed_bounds(lay.power.adapter.bounds(), lay.power.adapter_pose)
+    xg, yg, zf = (float(v) for v in gp.t)
+    sy = 1.0 if yg > ad.centre[1] else -1.0
+    x_e = xg + 2 * R if xg + 2 * R <= ad.hi[0] else xg - 2 * R
+    z_e = ad.lo[2] + ADAPTER_LEAD_EXIT_Z_SHARE * (ad.hi[2] - ad.lo[2])
+    side = ad.hi[1] if sy > 0 else ad.lo[1]
+    drop = z_e - 2 * R
+    top = zf + g.nut_top_mm() + R
+    pts = ((x_e, side, z_e), (x_e, yg, z_e), (x_e, yg, drop), (xg, yg, drop), (xg, yg, top))
+    return Route("battery_lead", "battery_lead", None, ("makita_adapter", "cable_gland"), pts, R, plugs=(False, False))
 
 
 def _s_bend(a: np.ndarray, b: np.ndarray, plug: float, R: float) -> tuple[Vec3, Vec3]:
@@ -228,6 +255,11 @@ def cable_report(asm: Assembly, extra_routes: list[Route] = (), only: list[Route
     shapes = [(n.name, n.shape(asm.cache)) for n in asm.nodes]
     boxes = {name: bounds_of(s) for name, s in shapes}
     paths, problems, details = [], [], []
+    gland = asm.layout.power.gland
+    if abs(table["battery_lead"].diameter_mm - gland.cable_d_mm) > 1e-9:
+        problems.append(f"cad/bought/cables.yaml: kinds.battery_lead.diameter_mm is {table['battery_lead'].diameter_mm:g} mm "
+                        f"but parts.{gland.part_id}.dims.cable_diameter_mm (the lead the gland is chosen for) is "
+                        f"{gland.cable_d_mm:g} mm: one of them is wrong")
     for r in rs:
         if r.kind not in table:
             raise KeyError(f"cable {r.name}: kind {r.kind!r} is not in cad/bought/cables.yaml")

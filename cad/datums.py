@@ -22,6 +22,17 @@ import numpy as np
 from platform_tools.rig.frames import Pose
 
 from .layout import Layout
+from .layout.boson_clamp import place_boson_clamps
+
+
+def clamp_gap_terms(lay: Layout) -> tuple[tuple[str, float, bool], ...]:
+    """What may close the retaining plate's gap to the heat sink (mm, each a +- bound): where the machined
+    stop sits from the sleeve's rear face (the bore's length), the printed pad's height and its face's form.
+    The Boson body's own length tolerance is not known (no vendor drawing): not in it."""
+    p = lay.rig.desc.printing.printer
+    return (("machined bore length", lay.rig.desc.enclosure.heat_sink.tolerance_mm, True),
+            ("printed pad height", p.tolerance_mm, True),
+            ("printed face form (half a layer)", p.layer_mm / 2, True))
 
 #: the six degrees of freedom, in the camera body frame (x forward, y left, z up)
 DOF = ("x", "y", "z", "roll", "pitch", "yaw")
@@ -60,14 +71,32 @@ class Feature:
 
 
 @dataclass(frozen=True)
+class Clamp:
+    """What holds a one-sided feature closed: a part that pushes the located part onto it (the Boson's
+    retaining plate onto the front stop). ``contacts``: where it bears on the located part, each normal
+    the direction it pushes; ``seat``: the (y, z) extent, in the camera frame, of the face the feature
+    bears on, which the push must fall inside (else it tips the part over the seat's edge);
+    ``standoff_mm``: the gap it keeps to the base, and ``standoff_terms`` what may close that gap (a
+    clamp that lands on the base before it reaches the part presses nothing)."""
+    name: str
+    part: str
+    presses: str                    # the feature it holds closed
+    contacts: tuple[Contact, ...]
+    seat: tuple[tuple[float, float], tuple[float, float]]
+    standoff_mm: float
+    standoff_terms: tuple[tuple[str, float, bool], ...]
+
+
+@dataclass(frozen=True)
 class Location:
     """``moving`` located on ``base`` by ``features`` (rig frame); ``frame``: the camera's body pose, the
-    axes its free motions are named in."""
+    axes its free motions are named in; ``clamps``: what keeps its one-sided features closed."""
     name: str
     moving: str
     base: str
     features: tuple[Feature, ...]
     frame: Pose
+    clamps: tuple[Clamp, ...] = ()
 
     def rows(self, without: str | None = None, frame: Pose | None = None) -> np.ndarray:
         f0 = self.frame if frame is None else frame
@@ -217,12 +246,19 @@ def camera_locations(lay: Layout) -> dict[str, tuple[Location, ...]]:
     # ---- each Boson: in its heat sink's bore against the front stop; the heat sink on the bar; the bar on the floor
     bar = lay.mounts.thermal_bar
     play = hs.bore_clearance_mm / 2
+    clamps = place_boson_clamps(lay)
     for side, t in lay.cameras.thermal.items():
         T = t.pose
         cb = lay.cameras.core.bounds()          # camera frame
         B = ("bore play (half the diametral clearance)", play, False)
         inboard = cb.lo[1] if t.sign > 0 else cb.hi[1]
         n_in = (0.0, 1.0, 0.0) if t.sign > 0 else (0.0, -1.0, 0.0)
+        cl = clamps[side]
+        pad = cl.pad
+        plate = Clamp("retaining plate", f"boson_clamp_{side}", "front stop ring",
+                      tuple(_contact(T, (pad.hi[0], y, z), (1.0, 0, 0), ()) for y in (pad.lo[1], pad.hi[1])
+                            for z in (pad.lo[2], pad.hi[2])),
+                      ((cb.lo[1], cb.hi[1]), (cb.lo[2], cb.hi[2])), cl.gap_mm, clamp_gap_terms(lay))
         in_bore = Location(f"boson_{side} in heat_sink_{side}", f"boson_{side}", f"heat_sink_{side}", (
             _face("bore floor (flat: clocks the roll)", f"heat_sink_{side}", cb.lo[2], cb.lo[0], cb.hi[0], cb.lo[1],
                   cb.hi[1], (B, M), T),
@@ -231,7 +267,7 @@ def camera_locations(lay: Layout) -> dict[str, tuple[Location, ...]]:
             Feature("front stop ring", f"heat_sink_{side}", ("x",),
                     (_contact(T, (cb.hi[0], 0.0, (cb.hi[2] + lay.cameras.lens.diameter_mm / 2) / 2), (-1.0, 0, 0),
                               (M,)),)),
-        ), T)
+        ), T, clamps=(plate,))
         sink = t.heat_sink
         heads = _joint_heads(lay, f"heat_sink_{side}_", sink.lo[2])
         w = hs.wall_mm                          # the base block is as wide as the sleeve (camera frame)
@@ -249,11 +285,46 @@ def camera_locations(lay: Layout) -> dict[str, tuple[Location, ...]]:
     return out
 
 
+def clamp_problems(loc: Location, cl: Clamp) -> tuple[list[str], str]:
+    """(problems, detail) of one clamp: it must press its feature's contacts shut (its push against their
+    normals), inside the seat, and keep a standoff to the base that what may close it cannot close."""
+    bad = []
+    target = next((f for f in loc.features if f.name == cl.presses), None)
+    if target is None:
+        return [f"{loc.name}: {cl.name} presses {cl.presses!r}, which is no feature of it"], ""
+    inv = loc.frame.inverse()
+    push = sum(np.asarray(c.normal, float) for c in cl.contacts)
+    push = push / max(np.linalg.norm(push), 1e-12)
+    along = min(-float(push @ np.asarray(c.normal, float)) for c in target.contacts)
+    if along <= 1e-9:
+        bad.append(f"{loc.name}: {cl.name} ({cl.part}) does not press {loc.moving} onto the {cl.presses}: it pushes "
+                   f"along {np.round(inv.rotate(push), 3).tolist()} (camera frame)")
+    centre = np.mean([inv.apply(np.asarray(c.point, float)) for c in cl.contacts], axis=0)
+    (y0, y1), (z0, z1) = cl.seat
+    if not (y0 <= centre[1] <= y1 and z0 <= centre[2] <= z1):
+        bad.append(f"{loc.name}: {cl.name} pushes at y {centre[1]:.1f}, z {centre[2]:.1f} mm (camera frame), outside "
+                   f"the {cl.presses}'s seat (y {y0:g} to {y1:g}, z {z0:g} to {z1:g}): it tips {loc.moving} over its edge")
+    worst = sum(abs(v) for _, v, _ in cl.standoff_terms)
+    if worst >= cl.standoff_mm - 1e-9:
+        bad.append(f"{loc.name}: {cl.name} keeps {cl.standoff_mm:g} mm off {loc.base}, and "
+                   + " + ".join(f"{n} {v:g}" for n, v, _ in cl.standoff_terms)
+                   + f" = {worst:g} mm may close it: it can land on {loc.base} before it presses {loc.moving}")
+    detail = (f"{loc.name}: {cl.name} ({cl.part}) holds the {cl.presses} closed: pushes at y {centre[1]:.1f}, "
+              f"z {centre[2]:.1f} mm inside its seat; {cl.standoff_mm:g} mm off {loc.base}, at most {worst:.2f} mm "
+              f"of it may close")
+    return bad, detail
+
+
 def datum_problems(locations: dict[str, tuple[Location, ...]]) -> tuple[list[str], list[str]]:
-    """(problems, details): a location with a free motion, a feature that does not remove what it claims."""
+    """(problems, details): a location with a free motion, a feature that does not remove what it claims,
+    a clamp that does not hold its feature closed (:func:`clamp_problems`)."""
     bad, details = [], []
     for cam, chain in locations.items():
         for loc in chain:
+            for cl in loc.clamps:
+                b, d = clamp_problems(loc, cl)
+                bad += [f"{cam}: {x}" for x in b]
+                details += [f"{cam}: {d}"] if d else []
             free = free_motions(loc.rows())
             if len(free):
                 bad.append(f"{cam}: {loc.name}: free to move ({', '.join(describe(free))}): add a datum feature")
@@ -277,4 +348,8 @@ def contact_gaps(locations: dict[str, tuple[Location, ...]], distance) -> list[t
                 for c in f.contacts:
                     nodes = [f.part] + ([loc.moving] if f.touches_moving else [])
                     out += [(cam, f"{loc.name}: {f.name}", node, float(distance(node, c.point))) for node in nodes]
+            for cl in loc.clamps:     # a clamp bears on the part it holds: its contacts on both
+                for c in cl.contacts:
+                    out += [(cam, f"{loc.name}: {cl.name}", node, float(distance(node, c.point)))
+                            for node in (cl.part, loc.moving)]
     return out

@@ -188,3 +188,19 @@ def monte_carlo(locations: dict[str, tuple[Location, ...]], camera: str, relativ
 
 def axis_names() -> tuple[str, ...]:
     return DOF
+
+
+# ----------------------------------------------------------------------------- clamps
+def clamp_margins(locations: dict[str, tuple[Location, ...]]) -> dict[str, dict]:
+    """Per clamp (``"<camera>: <clamp>"``): the standoff it keeps to the base (mm) and how much of it
+    the tolerances may close, worst case (sum) and 3-sigma RSS; a clamp whose standoff can close lands
+    on the base before it presses the part (cad/datums.py fails it)."""
+    out = {}
+    for cam, chain in locations.items():
+        for loc in chain:
+            for cl in loc.clamps:
+                v = np.array([abs(t) for _, t, _ in cl.standoff_terms])
+                out[f"{cam}: {cl.name}"] = dict(standoff_mm=cl.standoff_mm, worst_mm=float(v.sum()),
+                                                rss_mm=float(np.sqrt((v ** 2).sum())),
+                                                margin_mm=float(cl.standoff_mm - v.sum()))
+    return out

@@ -44,6 +44,9 @@ class StepSpec:
     view: Optional[tuple[float, float, float]] = None
     #: cable routes (cad/cables.py names, or shell patterns) this step lays: drawn in its cable picture
     cables: tuple[str, ...] = ()
+    #: a sub-assembly put together on the bench, off the rig: the assembly-order check drives its screws
+    #: clear of the step's own parts only (cad/assembly_order.py)
+    bench: bool = False
 
 
 @dataclass(frozen=True)

@@ -2,6 +2,7 @@
 bend too tight and a cable through a wall each failing the check."""
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -90,3 +91,29 @@ def test_a_cable_through_the_wall_fails(asm):
     assert any(p.startswith("cable test_wall") and "case_lower" in p for p in res.details), res.details[:4]
     inside = Route("test_inside", "sync_pair", None, ("a", "b"), ((x, y - 15, z), (x, y + 15, z)), 9.6)   # room for both plugs
     assert check_cables(asm, only=[inside]).ok
+
+
+@pytest.mark.slow
+def test_the_battery_lead_rises_straight_through_the_gland_and_a_tighter_loop_fails(asm):
+    """The battery lead (cad/cables.py ``battery_lead``): swept clear of every part, its last bend ending
+    below the gland's dome (it enters the seal straight); laid with half its radius, or with its drop
+    beside the adapter shortened to one radius, it fails."""
+    from cad.cables import battery_lead, cable_report
+    lead = battery_lead(asm)
+    k = KINDS["battery_lead"]
+    assert k.diameter_mm == asm.layout.power.gland.cable_d_mm            # the lead the gland is chosen for
+    rep = cable_report(asm, only=[lead])
+    assert not rep.problems, rep.problems
+    # the wire OpenCascade holds: every arc at the radius, the last one wholly below the dome's tip
+    gz = asm.layout.power.gland_pose.t[2] - asm.layout.power.gland.body_height_mm
+    arcs = [e for e in centreline(lead).Edges() if e.geomType() == "CIRCLE"]
+    assert len(arcs) == 3 and all(e.radius() == pytest.approx(k.min_bend_radius_mm) for e in arcs)
+    assert max(v.Z for v in arcs[-1].Vertices()) < gz
+    assert rep.paths[0].length_mm == pytest.approx(centreline(lead).Length(), abs=0.1)
+    tight = path_of(dataclasses.replace(lead, radius_mm=k.min_bend_radius_mm / 2), k)
+    assert any("needs at least 22 mm" in p for p in tight.problems), tight.problems
+    p = np.asarray(lead.points)
+    short = p.copy()
+    short[2:4, 2] += k.min_bend_radius_mm          # the drop beside the adapter one radius instead of two
+    squeezed = path_of(dataclasses.replace(lead, points=tuple(map(tuple, short))), k)
+    assert any("segment 2" in s and "too short" in s for s in squeezed.problems), squeezed.problems
