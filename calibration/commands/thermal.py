@@ -53,6 +53,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "partial views with no board edge in them; circle-grid: W x H hot discs (OpenCV's "
                         "patternSize); asymmetric-circle-grid: --board is the lattice, W twice the discs per row "
                         "(OpenCV's (4, 11) is 8x11) (docs/calibration.md)")
+    p.add_argument("--circle-radius", type=float, default=None, metavar="METRES",
+                   help="circle grids: the discs' radius (default 0.3 x --square, the renderer's); each disc's "
+                        "centroid is not its centre's projection, and the solve takes that bias off, iterated "
+                        "with the lens and board poses it solves")
+    p.add_argument("--no-centroid-correction", action="store_true",
+                   help="circle grids: solve from the detected centroids as they are (to compare)")
     p.add_argument("--out", required=True, type=Path, metavar="DIR", help="output folder (replaced whole)")
     p.add_argument("--lens-model", default=None, metavar="M",
                    help="default: chosen by the data (OPENCV8 or OpenCV's Kannala-Brandt: a model with a pole or fold "
@@ -101,6 +107,7 @@ def cmd_thermal(args: argparse.Namespace) -> int:
         check_target_board(args.target, board)
     except TargetError as exc:
         raise UserError(str(exc)) from None
+    args.circle_radius_m = _circle_radius(args, square)
     spec = rig.camera_model(rig.desc.sensors.thermal.camera_model)
     if args.topic and args.bag is None:
         raise UserError("--topic goes with --bag (a recording); --images reads image files")
@@ -122,12 +129,32 @@ def cmd_thermal(args: argparse.Namespace) -> int:
     return _write_and_report(args, obs, solution, out)
 
 
+def _circle_radius(args, square: float) -> float | None:
+    """The disc radius whose centroid bias the solve takes off (None: not a circle grid, or
+    --no-centroid-correction); a radius the board cannot have is bad input."""
+    from calibration.intrinsics.circle_bias import CircleBiasError, check_radius
+    from calibration.targets.spec import CIRCLE_KINDS, CIRCLE_RADIUS_SPACING
+    if args.target not in CIRCLE_KINDS:
+        if args.circle_radius is not None:
+            raise UserError(f"--circle-radius goes with --target circle-grid or asymmetric-circle-grid, "
+                            f"not {args.target}")
+        return None
+    if args.no_centroid_correction:
+        return None
+    try:
+        return check_radius(CIRCLE_RADIUS_SPACING * square if args.circle_radius is None else args.circle_radius,
+                            square)
+    except CircleBiasError as exc:
+        raise UserError(str(exc)) from None
+
+
 def _calibrate(args, rig, spec, images, board, square):
     from calibration.thermal.pipeline import calibrate
     return calibrate(images, board, square, solver=args.solver, lens_model=args.lens_model,
                      focal_px=rig.focal_px(spec), expected_size=(spec.width_px, spec.height_px),
                      camera_name=args.camera_name, rig_hash=rig.hash, show_solver_output=args.verbose,
-                     nominal_corner_angle_deg=nominal_corner_angle_deg(rig), target=args.target)
+                     nominal_corner_angle_deg=nominal_corner_angle_deg(rig), target=args.target,
+                     circle_radius_m=args.circle_radius_m)
 
 
 def _write_and_report(args, obs, solution, out) -> int:

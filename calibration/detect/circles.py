@@ -7,10 +7,13 @@ unchanged.
    between its median and its top; a connected component is a blob candidate when it is
    elliptical (its area within ELLIPSE_FILL of the ellipse of its second moments, axes no thinner than
    MIN_AXIS_RATIO) and does not touch the image's edge; a blob is a candidate seen at two thresholds
-   or more (hot discs on a cold board; a cooled board, cold discs, is the same with the sign turned:
+   or more (a group of components that holds two sizeable ones at one threshold is several blobs
+   merged, :func:`_merged`, and leads no group) (hot discs on a cold board; a cooled board, cold discs, is the same with the sign turned:
    both are tried, the one whose lattice is larger wins).
 2. Centres (:func:`blob_centre`): the weighted centroid of the blob, weights the intensity above a
-   plane fitted to the ring just outside it, scaled by the blob's top and clipped to [0, 1]; a blob
+   plane fitted to the ring just outside it, divided by the disc's own level (:func:`_disc_top`: a
+   plane over its interior, so a contrast falling across the disc does not pull the centre) and
+   clipped to [0, 1]; a blob
    whose ring is not flat (RING_FLAT) is dropped (a hand touches it). This is the centroid of the
    imaged disc's area, which is NOT the projection of the disc's centre under perspective or a
    fisheye: :func:`disc_centroid_bias` gives the difference for a lens and pose (docs/calibration.md,
@@ -65,6 +68,7 @@ AREA_RATIO = 3.0          # neighbouring blobs' areas differ by at most this fac
 MIN_CIRCLES = 6
 RING_FLAT = 0.15          # the ring around a disc is flat within this share of the disc's contrast
 MAX_TRANSFORM = 2         # |entries| of the integer maps tried in place()
+MERGED_MIN_AREA_PX = 20   # two components this large at one threshold in one group: several blobs
 
 
 # ----------------------------------------------------------------------------- blobs
@@ -89,6 +93,16 @@ def _components(h: np.ndarray, t: float, max_area: float) -> list[tuple[float, f
     return out
 
 
+def _merged(members: np.ndarray) -> bool:
+    """Whether components (x, y, area, threshold) grouped around a large one are several blobs: two of
+    them at one threshold, each of MERGED_MIN_AREA_PX or more (one disc is one component per threshold;
+    noise may split its top into specks, never into two blobs that size). A hot patch of board joining
+    discs at a low threshold can be elliptical enough to lead a group and swallow the disc next to its
+    centroid (stereographic truth, "real", the 8 x 7 asymmetric grid at roll 0: disc 48)."""
+    big = members[members[:, 2] >= MERGED_MIN_AREA_PX]
+    return len(np.unique(big[:, 3])) < len(big)
+
+
 def find_blobs(h: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Blobs brighter than their surround in ``h`` (H, W) float32: (centres (n, 2) px, areas (n,) px,
     thresholds (n,): the middle one each blob was seen at)."""
@@ -110,6 +124,9 @@ def find_blobs(h: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             continue
         r = max(1.5, 0.5 * math.sqrt(arr[k, 2] / math.pi))
         members = [m for m in tree.query_ball_point(arr[k, :2], r) if group[m] < 0]
+        if _merged(arr[members]):
+            group[k] = -2            # several blobs merged at a low threshold: not one; its parts stay free
+            continue
         group[members] = len(out)
         levels = sorted(set(arr[members, 3].tolist()))
         if len(levels) >= MIN_LEVELS:
@@ -153,9 +170,29 @@ def blob_centre(h: np.ndarray, xy: np.ndarray, area: float, t: float) -> np.ndar
     resid = win[ring] - bg[ring]
     if fg <= 0 or float(np.percentile(np.abs(resid), 90)) > RING_FLAT * fg:
         return np.full(2, np.nan)          # something warm or cold touches the disc (a hand)
-    w = np.clip(top / fg, 0.0, 1.0) * region
+    w = np.clip(top / _disc_top(top, comp, d, xs, ys, fg), 0.0, 1.0) * region
     s = float(w.sum())
     return np.array([x0 + float((w * xs).sum()) / s, y0 + float((w * ys).sum()) / s])
+
+
+def _disc_top(top: np.ndarray, comp: np.ndarray, d: int, xs: np.ndarray, ys: np.ndarray, fg: float):
+    """The disc's own level over the window, what a weight of 1 is: a plane fitted to the disc's interior
+    (the blob eroded by ``d``), scaled so its mean there is ``fg``; ``fg`` itself where the interior is
+    too small. A contrast that falls across the disc (vignetting, the warm housing at the image's
+    corners, the heater's falloff, gain non-uniformity) weights its dimmer side's rim less under one
+    flat scale and pulls the centroid towards the brighter side: inwards, growing with the field angle
+    (stereographic truth, "real": -0.026 px radially at 35-45 deg, -0.042 at 45-60, after the
+    centroid bias; ~0 with those effects off)."""
+    inner = cv2.erode(comp, np.ones((2 * d + 1, 2 * d + 1), np.uint8)) > 0
+    if inner.sum() < 6:
+        return fg
+    A = np.column_stack([xs[inner], ys[inner], np.ones(int(inner.sum()))]).astype(float)
+    plane, *_ = np.linalg.lstsq(A, top[inner].astype(float), rcond=None)
+    lvl = plane[0] * xs + plane[1] * ys + plane[2]
+    mean = float(lvl[inner].mean())
+    if mean <= 0:
+        return fg
+    return np.maximum(lvl * (fg / mean), 0.5 * fg)
 
 
 # ----------------------------------------------------------------------------- lattice

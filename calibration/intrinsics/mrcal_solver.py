@@ -14,6 +14,7 @@ The sequence follows mrcal's own calibration tool: a stereographic seed from the
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -65,6 +66,7 @@ class Solution:
     notes: list[str] = field(default_factory=list)
     board_rt: np.ndarray | None = None   # (N, 6) board poses of a solver without optimization_inputs
     model_choice: dict | None = None     # how the default model was chosen (model_choice.Choice.summary)
+    centroid_correction: dict | None = None  # circle grids: the bias iteration (circle_bias.Rounds.summary)
 
     def cameramodel(self, note: str | None = None):
         import mrcal
@@ -409,3 +411,24 @@ def solve(obs: BoardObservations, *, lensmodel: str | None, focal_px: float,
         notes.append(note)
     return Solution(full_name, oi["intrinsics"][0].copy(), obs.imagersize, obs, oi, rms, per_image, res,
                     inlier, rejected, rejected_corners, notes=notes)
+
+
+def resolve(solution: Solution, obs: BoardObservations) -> Solution:
+    """``solution`` solved again from ``obs``: the same views and corners at other pixel positions (a
+    circle grid's centres with their centroid bias taken off, calibration/intrinsics/circle_bias.py),
+    from its own answer and with its own settings and inlier decisions (mrcal's outliers stay out, no
+    new rejection: re-deciding them on a moving input flips corners in and out and an iteration
+    then cycles)."""
+    import mrcal
+    if list(obs.names) != list(solution.observations.names):
+        raise SolveError("resolve: the observations are not the solution's views")
+    oi = {k: (np.array(v, copy=True) if isinstance(v, np.ndarray) else v)
+          for k, v in solution.optimization_inputs.items()}
+    oi["observations_board"][..., :2] = obs.mrcal_array()[..., :2]
+    oi["do_apply_outlier_rejection"] = False
+    mrcal.optimize(**oi)
+    res, inlier, per_image, rms = residual_summary(obs, oi)
+    return dataclasses.replace(solution, intrinsics=oi["intrinsics"][0].copy(), observations=obs,
+                               optimization_inputs=oi, rms_px=rms, per_image_rms_px=per_image, residuals=res,
+                               inlier=inlier, rejected_images=list(solution.rejected_images),
+                               rejected_corners=list(solution.rejected_corners), notes=list(solution.notes))

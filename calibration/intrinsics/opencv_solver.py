@@ -6,6 +6,8 @@ residual is far outside the rest are dropped, then whole images that stand out, 
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from calibration.lens import kannala_brandt as kb
@@ -17,8 +19,9 @@ CORNER_OUTLIER_SIGMAS = 5.0    # a corner further than this many robust sigmas i
 CORNER_OUTLIER_FLOOR_PX = 0.5
 
 
-def _calibrate(obs: BoardObservations, inlier: np.ndarray, focal_px: float):
-    """(params (8,), residuals (N, H*W, 2) of every seen corner, poses (N, 6) Rodrigues r then t)."""
+def _calibrate(obs: BoardObservations, inlier: np.ndarray, focal_px: float, seed: np.ndarray | None = None):
+    """(params (8,), residuals (N, H*W, 2) of every seen corner, poses (N, 6) Rodrigues r then t);
+    ``seed``: params to start from (default: ``focal_px``, the centred principal point, no distortion)."""
     import cv2
     board_pts = obs.board_points_m()
     objp, imgp = [], []
@@ -29,6 +32,9 @@ def _calibrate(obs: BoardObservations, inlier: np.ndarray, focal_px: float):
     w, h = obs.imagersize
     K = np.array([[focal_px, 0, (w - 1) / 2], [0, focal_px, (h - 1) / 2], [0, 0, 1.0]])
     D = np.zeros((4, 1))
+    if seed is not None:
+        K = np.array([[seed[0], 0, seed[2]], [0, seed[1], seed[3]], [0, 0, 1.0]])
+        D = np.asarray(seed[4:8], float).reshape(4, 1).copy()
     flags = cv2.fisheye.CALIB_RECOMPUTE_EXTRINSIC | cv2.fisheye.CALIB_FIX_SKEW | cv2.fisheye.CALIB_USE_INTRINSIC_GUESS
     crit = (cv2.TERM_CRITERIA_COUNT + cv2.TERM_CRITERIA_EPS, 200, 1e-12)
     try:
@@ -90,3 +96,16 @@ def solve(obs: BoardObservations, *, focal_px: float, max_image_rejections: int 
     sol.notes.append("OpenCV fisheye (Kannala-Brandt); no projection uncertainty (mrcal computes that "
                      "from its own solve only)")
     return sol
+
+
+def resolve(solution: Solution, obs: BoardObservations) -> Solution:
+    """``solution`` solved again from ``obs`` (the same views, corners at other pixel positions: see
+    mrcal_solver.resolve), from its own answer, with its inlier corners."""
+    if list(obs.names) != list(solution.observations.names):
+        raise SolveError("resolve: the observations are not the solution's views")
+    params, res, poses = _calibrate(obs, solution.inlier, float(solution.intrinsics[0]),
+                                    seed=np.asarray(solution.intrinsics, float))
+    per, rms = _per_image(res, solution.inlier)
+    return dataclasses.replace(solution, intrinsics=params, observations=obs, rms_px=rms, per_image_rms_px=per,
+                               residuals=res, board_rt=poses, rejected_images=list(solution.rejected_images),
+                               rejected_corners=list(solution.rejected_corners), notes=list(solution.notes))

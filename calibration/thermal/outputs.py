@@ -119,6 +119,7 @@ def build(solution: Solution, *, camera_name: str, rig_hash: str, corners_vnl: s
                                                   observed_noise_px=unc.observed_noise_px),
         cross_validation=None if cv is None else cv.summary(), cross_validation_error=cv_error,
         validity=val.summary(), lens_health={name: h.summary() for name, h in lens_health.items()},
-        formats=fmt, notes=list(solution.notes), model_choice=solution.model_choice, rig_hash=rig_hash, verdict=verdict.to_dict())
+        formats=fmt, notes=list(solution.notes), model_choice=solution.model_choice,
+        centroid_correction=solution.centroid_correction, rig_hash=rig_hash, verdict=verdict.to_dict())
     files["report.html"] = html.render(summary, verdict, html.plots(solution, cov, unc, cv, val))
     return Outputs(files, summary, verdict)

@@ -100,7 +100,26 @@ def _bit_depth(paths) -> int | None:
 
 
 def solve(obs: BoardObservations, *, solver: str, lens_model: str | None, focal_px: float,
-          nominal_corner_angle_deg: float = 0.0):
+          nominal_corner_angle_deg: float = 0.0, circle_radius_m: float | None = None):
+    """:func:`solve_once`, and for a circle grid (``circle_radius_m``: its discs' radius; None: not a
+    circle grid, or the correction off) iterated with each disc's centroid bias taken off
+    (calibration/intrinsics/circle_bias.py): the model the first solve chose (or was given) is solved
+    again, warm, from the corrected centres until the correction stops changing."""
+    from calibration.intrinsics import circle_bias
+    first = solve_once(obs, solver=solver, lens_model=lens_model, focal_px=focal_px,
+                       nominal_corner_angle_deg=nominal_corner_angle_deg)
+    if circle_radius_m is None:
+        return first
+    try:
+        return circle_bias.solve_corrected(obs, first, circle_radius_m)[0]
+    except Exception as exc:      # noqa: BLE001 - mrcal, OpenCV raise plain errors on real data
+        detail = " ".join(str(exc).split())[:160] or type(exc).__name__
+        raise CheckFailed(f"the circle-centre correction's re-solve failed ({detail}); try "
+                          f"--no-centroid-correction") from None
+
+
+def solve_once(obs: BoardObservations, *, solver: str, lens_model: str | None, focal_px: float,
+               nominal_corner_angle_deg: float = 0.0):
     """The lens from the observations: ``solver`` "mrcal" (``lens_model`` a name lensmodels.resolve
     accepts, None: chosen by the data, below) or "opencv" (cv2.fisheye); ``focal_px`` the nominal focal
     length, the seed. Returns an :class:`~calibration.intrinsics.mrcal_solver.Solution`.
@@ -163,14 +182,15 @@ def _choose(o8, kb, nominal_corner_angle_deg: float):
 def calibrate(images: str, board: tuple[int, int], square_m: float, *, solver: str, lens_model: str | None,
               focal_px: float, expected_size: tuple[int, int], camera_name: str, rig_hash: str,
               show_solver_output: bool = False, nominal_corner_angle_deg: float = 0.0,
-              target: str = "checkerboard"):
+              target: str = "checkerboard", circle_radius_m: float | None = None):
     """The whole pipeline: (the observations detected, the solution, its
     :class:`~calibration.thermal.outputs.Outputs`; the solution holds the observations it kept after
     rejecting images). ``expected_size``:
     the rig description's thermal imager (W, H) px, warned about when the images differ;
     ``show_solver_output``: let mrcal's C-level progress lines through to stderr;
     ``nominal_corner_angle_deg``: the angle the rig's nominal lens sees the image corners at (lens_check.py);
-    ``target``: the --target kind (calibration/targets)."""
+    ``target``: the --target kind (calibration/targets); ``circle_radius_m``: a circle grid's disc radius,
+    whose centroid bias is then taken off in the solve (None: no correction)."""
     check_lens_model(lens_model, expected_size)
     obs, corners_text = detect(images, board, square_m, target)
     if obs.imagersize != tuple(expected_size):
@@ -179,7 +199,7 @@ def calibrate(images: str, board: tuple[int, int], square_m: float, *, solver: s
         nominal_corner_angle_deg = 0.0
     with quiet_stderr(enabled=not show_solver_output):
         solution = solve(obs, solver=solver, lens_model=lens_model, focal_px=focal_px,
-                         nominal_corner_angle_deg=nominal_corner_angle_deg)
+                         nominal_corner_angle_deg=nominal_corner_angle_deg, circle_radius_m=circle_radius_m)
         out: Outputs = build(solution, camera_name=camera_name, rig_hash=rig_hash, corners_vnl=corners_text,
                              nominal_corner_angle_deg=nominal_corner_angle_deg)
     return obs, solution, out
