@@ -34,11 +34,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "rectified_left/right.cameramodel (mrcal.rectified_system, LATLON), rectification_left/right.npy "
                     "(float32 (H, W, 2) maps for cv2.remap(img, map, None, cv2.INTER_LINEAR)) and stereo.json "
                     "(pose, difference from CAD, RMS, epipolar error: the rectified-row difference of matched "
-                    "corners, RMS and p99, after and before the solve).",
+                    "corners, RMS and p99, after and before the solve). For a Kannala-Brandt pair (--left-fisheye / "
+                    "--right-fisheye, or thermal_opencv.yaml beside each model when both are fisheye) stereo.json "
+                    "also holds the cross-check with cv2.fisheye.stereoCalibrate / stereoRectify on the same "
+                    "corners (opencv_fisheye_cross_check: pose, rectifying rotations, epipolar error).",
         epilog="Exit codes: 0 solved, the epipolar RMS within --max-epipolar-rms (a pose beyond the tolerance "
                "from CAD is a warning); 1 solved but the epipolar RMS above it (outputs written); 2 bad input "
                "(a missing model or image, an image without its partner, models of different imager sizes or "
-               "lens models, an image of another size than its model, fewer than --min-views shared views).")
+               "lens models, an image of another size than its model, fewer than --min-views shared views, "
+               "a --left-fisheye / --right-fisheye that is not an OpenCV fisheye camera of the model's size).")
     p.add_argument("--left", required=True, type=Path, metavar="L.cameramodel", help="the left camera's mono model")
     p.add_argument("--right", required=True, type=Path, metavar="R.cameramodel", help="the right camera's mono model")
     p.add_argument("--images", required=True, type=Path, metavar="DIR",
@@ -47,6 +51,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--square", required=True, type=float, metavar="METRES", help="square size in metres")
     p.add_argument("--target", default="checkerboard", choices=TARGET_KINDS, help="the board (as calibrate thermal)")
     p.add_argument("--out", required=True, type=Path, metavar="DIR", help="output folder (replaced whole)")
+    p.add_argument("--left-fisheye", type=Path, metavar="L.yaml",
+                   help="the left camera's exact Kannala-Brandt lens (thermal_opencv.yaml of `calibrate thermal "
+                        "--solver opencv`, distortion_model fisheye): the pair is then cross-checked with "
+                        "cv2.fisheye.stereoCalibrate / stereoRectify (default: thermal_opencv.yaml beside each "
+                        "model when both are fisheye)")
+    p.add_argument("--right-fisheye", type=Path, metavar="R.yaml", help="the right camera's (as --left-fisheye)")
     p.add_argument("--refine-intrinsics", action="store_true",
                    help="solve both lenses jointly with the pose (default: held at the mono models)")
     p.add_argument("--min-views", type=int, default=None, metavar="N",
@@ -83,6 +93,41 @@ def check_models(left, right, paths: tuple[Path, Path]) -> None:
     if lm != rm:
         raise UserError(f"{paths[1]}: lens model {rm}, {paths[0]} is {lm}; mrcal solves one lens model for both "
                         f"cameras: calibrate both with the same --lens-model")
+
+
+def fisheye_lenses(args, models):
+    """(left Fisheye, right Fisheye, (paths)) for the OpenCV cross-check, or None: --left-fisheye and
+    --right-fisheye, else thermal_opencv.yaml beside each model when both are fisheye. Bad input: one
+    of the two flags only, an unreadable or non-fisheye file given, a size other than its model's."""
+    from calibration.stereo.fisheye_check import FisheyeFileError, read_fisheye
+    given = (args.left_fisheye, args.right_fisheye)
+    if (given[0] is None) != (given[1] is None):
+        raise UserError("--left-fisheye and --right-fisheye go together (one lens file per camera)")
+    paths = given if given[0] is not None else tuple(m.parent / "thermal_opencv.yaml" for m in (args.left, args.right))
+    try:
+        lenses = tuple(read_fisheye(p) for p in paths)
+    except FisheyeFileError as exc:
+        if given[0] is None:
+            return None           # not a Kannala-Brandt pair: nothing to cross-check
+        raise UserError(f"{exc}; nothing written") from None
+    for p, f, m in zip(paths, lenses, models):
+        if tuple(f.size) != tuple(int(x) for x in m.imagersize()):
+            raise UserError(f"{p}: a {f.size[0]}x{f.size[1]} camera, its model is "
+                            f"{m.imagersize()[0]}x{m.imagersize()[1]}; give each camera's own files")
+    return lenses[0], lenses[1], paths
+
+
+def cross_check_line(check: dict) -> str:
+    """One line of the OpenCV fisheye cross-check for the terminal."""
+    if check.get("errors") and "rectification" not in check:
+        return f"cv2.fisheye cross-check: {'; '.join(check['errors'])}"
+    r, rows = check["rectification"], check["epipolar_opencv_rectification"]["rows"]
+    pose = check.get("pose")
+    at = (f"; cv2.fisheye.stereoCalibrate's pose {pose['translation_mm']:.3f} mm and {pose['rotation_deg']:.4f} deg "
+          f"from ours") if pose else f"; {'; '.join(check['errors'])}"
+    return (f"cv2.fisheye cross-check: stereoRectify's rotations {r['rotation_left_deg']:.4f} / "
+            f"{r['rotation_right_deg']:.4f} deg from ours (baseline axis {r['baseline_axis_deg']:.4f} deg), "
+            f"epipolar RMS through it {rows['rms_px']:.3f} px (ours {check['epipolar_ours']['rms_px']:.3f})" + at)
 
 
 def detect_pairs(pairs, board, square, target, sizes, quiet: bool):
@@ -129,6 +174,7 @@ def cmd_thermal_stereo(args: argparse.Namespace) -> int:
             raise UserError(f"--{name.replace('_', '-')} {getattr(args, name)}: must be > 0")
     left, right = read_model(args.left, "--left"), read_model(args.right, "--right")
     check_models(left, right, (args.left, args.right))
+    fisheye = fisheye_lenses(args, (left, right))
     try:
         pairs = find_pairs(args.images)
     except StereoInputError as exc:
@@ -154,6 +200,11 @@ def cmd_thermal_stereo(args: argparse.Namespace) -> int:
     seed_rect = rectify.rectified_models(seed_models)
     epi_seed = rectify.epipolar_stats(rectify.row_disparity(seed_models, seed_rect, shared.left, shared.right))
     diff = pose_difference(T_seed, sol.T_left_right)
+    check = None
+    if fisheye is not None:
+        from calibration.stereo.fisheye_check import cross_check
+        check = dict(cross_check(*fisheye[:2], shared.left, shared.right, shared.board_points_m(),
+                                 sol.rt_right_left, rect, epi), files=[str(f) for f in fisheye[2]])
     warnings = []
     if diff["translation_mm"] > args.tolerance_mm or diff["rotation_deg"] > args.tolerance_deg:
         warnings.append(f"the right camera is {diff['translation_mm']:.2f} mm and {diff['rotation_deg']:.3f} deg "
@@ -173,7 +224,7 @@ def cmd_thermal_stereo(args: argparse.Namespace) -> int:
         "from_cad": diff, "epipolar": epi, "epipolar_at_cad": epi_seed,
         "rectified": {"lensmodel": rect[0].intrinsics()[0], "imagersize": [int(x) for x in rect[0].imagersize()],
                       "baseline_mm": diff["baseline_mm"]},
-        "warnings": warnings, "rig_hash": rig.hash, "out": str(args.out)}
+        "opencv_fisheye_cross_check": check, "warnings": warnings, "rig_hash": rig.hash, "out": str(args.out)}
     files = all_files(sol.models, rect, maps, report, seed_note="seeded from the CAD pose")
     with atomic.OutputDir(args.out) as stage:
         for name, data in files.items():
@@ -187,6 +238,8 @@ def cmd_thermal_stereo(args: argparse.Namespace) -> int:
               f"camera at ({x:.2f}, {y:.2f}, {z:.2f}) mm in the left, baseline {diff['baseline_mm']:.2f} mm, "
               f"{diff['translation_mm']:.2f} mm and {diff['rotation_deg']:.3f} deg from CAD; epipolar error RMS "
               f"{epi['rms_px']:.3f} px, p99 {epi['p99_px']:.3f} px (at the CAD pose {epi_seed['rms_px']:.2f} px)")
+        if check is not None:
+            print(cross_check_line(check))
         for w in warnings:
             print(f"warning: {w}")
     if not epi["rms_px"] <= args.max_epipolar_rms:

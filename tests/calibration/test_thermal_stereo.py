@@ -171,32 +171,40 @@ def test_too_few_shared_views_is_refused(noisy_views, poses_cad):
 
 
 # ---------------------------------------------------------------- the command on rendered images
-@pytest.fixture(scope="module")
-def rendered(tmp_path_factory, poses_cad):
-    """8 stereo pairs of a heated 10x7 board rendered through the two truth lenses at the truth pose
-    (calibration/synth's renderer and microbolometer, "easy" look), the two mono models and the truth."""
+def render_pairs(root, lenses, T_true, n: int = 8, seed: int = 21):
+    """n stereo pairs of a heated 10x7 board rendered through ``lenses`` at ``T_true`` (calibration/synth's
+    renderer and microbolometer, "easy" look) into root/set/left and root/set/right; the true corners."""
     from calibration.synth.board import Board
     from calibration.synth.difficulty import level
     from calibration.synth.poses import BoardView
     from calibration.synth.render import render_image
     from calibration.synth.sensor import Sensor
-    root = tmp_path_factory.mktemp("stereo")
-    lenses = truth_lenses()
-    T_true = truth_pose(poses_cad)
-    rng = np.random.default_rng(21)
-    poses, ql, qr = sample_poses(rng, lenses, T_true, 8)
+    rng = np.random.default_rng(seed)
+    poses, ql, qr = sample_poses(rng, lenses, T_true, n)
     diff = level("easy")
     board = Board(*BOARD, SQUARE)
     T_right_left = T_true.inverse()
     for side, lens, q in (("left", lenses[0], ql), ("right", lenses[1], qr)):
         (root / "set" / side).mkdir(parents=True)
-        sensor = Sensor.make(np.random.default_rng([21, len(side)]), lens.size[::-1], diff)
+        sensor = Sensor.make(np.random.default_rng([seed, len(side)]), lens.size[::-1], diff)
         for k, (R, t) in enumerate(poses):
             if side == "right":
                 R, t = T_right_left.R @ R, T_right_left.R @ t + T_right_left.t / 1000.0
-            img, _, _ = render_image(np.random.default_rng([21, k, len(side)]), lens, board,
+            img, _, _ = render_image(np.random.default_rng([seed, k, len(side)]), lens, board,
                                      BoardView(R, t, q[k], False), diff, sensor)
             cv2.imwrite(str(root / "set" / side / f"{k:03d}.png"), img)
+    return ql, qr
+
+
+@pytest.fixture(scope="module")
+def rendered(tmp_path_factory, poses_cad):
+    """8 stereo pairs through the two truth lenses at the truth pose (render_pairs), the two mono models
+    and the truth."""
+    root = tmp_path_factory.mktemp("stereo")
+    lenses = truth_lenses()
+    T_true = truth_pose(poses_cad)
+    ql, qr = render_pairs(root, lenses, T_true)
+    for side, lens in (("left", lenses[0]), ("right", lenses[1])):
         write_cameramodel(root / f"{side}.cameramodel", lens, f"truth lens of the {side} camera")
     return root, lenses, T_true, ql, qr
 
