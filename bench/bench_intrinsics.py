@@ -11,7 +11,7 @@ calibrate thermal's verdict (ours only: the others have none) and the time, also
   opencv          cv2.findChessboardCornersSB on 8-bit images + cv2.fisheye.calibrate
   mrgingham+mrcal mrgingham on 8-bit images + mrcal-calibrate-cameras (the command-line tool)
 
-Usage: .venv/bin/python bench/bench_intrinsics.py [--n 40] [--seed 7] [--keep DIR]
+Usage: .venv/bin/python bench/bench_intrinsics.py [--n 40] [--seed 7] [--output y16|agc8] [--keep DIR]
 Targets (issue 6): <= 0.1 px RMS whole image, <= 0.05 px central 80%.
 """
 from __future__ import annotations
@@ -145,14 +145,17 @@ def main() -> int:
     ap.add_argument("--n", type=int, default=40)
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--difficulty", default="real")
+    ap.add_argument("--output", default="y16", choices=("y16", "agc8"),
+                    help="y16: 16-bit counts; agc8: the same frames through the 8-bit AGC (calibration/synth/agc.py), "
+                         "every method on the same 8-bit images (bench_calib_lenses.py runs both on every truth lens)")
     ap.add_argument("--keep", type=Path, default=None, help="work folder to keep (default: a temp folder)")
     args = ap.parse_args()
     work = args.keep or Path(tempfile.mkdtemp(prefix="bench_intrinsics."))
     src = work / "set"
     t = time.perf_counter()
     render_dataset(src, n=args.n, difficulty=args.difficulty, board=BOARD, square=SQUARE, seed=args.seed,
-                   show_progress=False)
-    print(f"rendered {args.n} '{args.difficulty}' images, board {BOARD[0]}x{BOARD[1]}, in {time.perf_counter() - t:.1f} s: {src}")
+                   show_progress=False, output=args.output)
+    print(f"rendered {args.n} '{args.difficulty}' {args.output} images, board {BOARD[0]}x{BOARD[1]}, in {time.perf_counter() - t:.1f} s: {src}")
     truth = mrcal.cameramodel(str(src / "truth.cameramodel"))
     size = tuple(int(x) for x in truth.imagersize())
     files8 = to8bit(src, work / "set8")
