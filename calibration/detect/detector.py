@@ -7,11 +7,12 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from .candidates import find_candidates, normalise
+from .candidates import column_pattern, find_candidates
 from .complete import complete
 from .grid import anchor, label, link, orient
 from .grow import grow, lattice_outliers
 from .refine import image_noise, levels, refine
+from .regions import disagreeing
 
 MIN_CORNERS = 6
 
@@ -87,8 +88,9 @@ def touched(f: np.ndarray, xy: np.ndarray, spacing: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Lattice:
-    """What every target's detector starts from: the destriped image ``f``, the contrast-normalised
-    smoothed image ``g``, the saddle response ``S``, the local contrast and pixel noise, and the
+    """What every target's detector starts from: the destriped image ``f`` (and ``fine``, destriped
+    only where the rows agree on the column pattern: what the sub-pixel refinement reads), the
+    contrast-normalised smoothed image ``g``, the saddle response ``S``, the local contrast and pixel noise, and the
     labelled corner lattice (``xy`` (m, 2), ``ij`` (m, 2) lattice labels with an arbitrary origin and
     orientation)."""
     f: np.ndarray
@@ -99,13 +101,17 @@ class Lattice:
     n_candidates: int
     xy: np.ndarray
     ij: np.ndarray
+    fine: np.ndarray | None = None     # the image the sub-pixel refinement runs on (normalise, measured_only)
 
 
 def find_lattice(image: np.ndarray, board: tuple[int, int]) -> tuple[Lattice | None, str]:
-    """Candidates, linked and labelled into the largest lattice, grown (never past max(W, H) + 1
+    """Candidates, linked and labelled into the largest lattice, its labels made consistent
+    (regions.py: what disagrees with the largest region is dropped), grown (never past max(W, H) + 1
     lattice steps); (None, why) when there is no grid of corners."""
     W, H = int(board[0]), int(board[1])
-    f = normalise(to_float(image))
+    raw = to_float(image)
+    pattern, measured = column_pattern(raw)
+    f = raw - pattern[None, :]                       # candidates.normalise, without a second pass
     if float(f.max() - f.min()) <= 0:
         return None, "the image is flat (every pixel the same)"
     noise = image_noise(f)
@@ -118,9 +124,15 @@ def find_lattice(image: np.ndarray, board: tuple[int, int]) -> tuple[Lattice | N
     idx, ij = label(cands, slots)
     if len(idx) < MIN_CORNERS:
         return Lattice(f, g, S, local_sd, noise, len(cands.xy), cands.xy[:0], ij[:0]), "no grid of corners found"
+    # one labelling: what a wrong link shifted is dropped (the growth finds it again from the grid)
+    keep = ~disagreeing(cands.xy[idx], ij)[0]
+    idx, ij = idx[keep], ij[keep]
     # fill the holes and extend the runs the linking missed
     xy, ij, _ = grow(g, S, cands.xy[idx], ij, cands.strength[idx], (W, H))
-    lat = Lattice(f, g, S, local_sd, noise, len(cands.xy), xy, ij)
+    keep = ~disagreeing(xy, ij)[0]
+    xy, ij = xy[keep], ij[keep]
+    fine = raw - np.where(measured, pattern, 0.0)[None, :].astype(np.float32)   # normalise(measured_only=True)
+    lat = Lattice(f, g, S, local_sd, noise, len(cands.xy), xy, ij, fine)
     if len(xy) < MIN_CORNERS:
         return lat, "no grid of corners found"
     return lat, ""
@@ -141,7 +153,7 @@ def finish(lat: Lattice, xy: np.ndarray, ij: np.ndarray, board: tuple[int, int],
     the target does not have (a marker's own squares): never reported, even if the image shows one."""
     W, H = board
     spacing = corner_spacing(xy, ij)
-    fine = refine(lat.f, xy, spacing)
+    fine = refine(lat.f if lat.fine is None else lat.fine, xy, spacing)
     fine[lattice_outliers(fine, ij)] = np.nan
     fine[touched(lat.f, fine, spacing)] = np.nan
     ok = np.isfinite(fine[:, 0])

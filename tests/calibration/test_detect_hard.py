@@ -59,17 +59,16 @@ def test_fully_visible_hard_boards_are_found_complete(stereographic_hard, name, 
 
 
 @pytest.mark.slow
-def test_a_steep_board_at_the_image_edge_is_never_mislabelled(stereographic_hard):
+def test_a_steep_board_at_the_image_edge_is_found_complete(stereographic_hard):
     """Image 010 (cooled, 3.56 K, the whole board in view at the right edge, lines crossing at
     39-57 deg, steps from 16 to 60 px): the candidates' ring tests miss 18 of its 64 corners and the
-    linking then labels the rest inconsistently (labels one to three squares apart within one grid).
-    Not found complete yet (open); what is reported must be within 1 px of its own truth, and a refusal
-    must say why."""
+    linking labelled the rest inconsistently (regions one to three squares apart within one grid), so
+    the view was refused ("partial board ... neither board edge seen"). With the regions that disagree
+    with the largest dropped before the growth (calibration/detect/regions.py), the growth finds those
+    corners again from the grid: complete, every corner within 1 px of its own truth."""
     img, q, im = stereographic_hard["010.png"]
-    assert im["visible"] == 64
+    assert im["visible"] == 64 and not im["occluded"]
     det = detect_corners(img, BOARD)
     err = _errors(det, q)
-    if det.detected:
-        assert err.max() <= 1.0, f"{int(np.sum(err > 1))} corners more than 1 px off (max {err.max():.1f})"
-    else:
-        assert det.reason.startswith("partial board") or "grid" in det.reason
+    assert det.complete, f"{det.found} of 64 corners ({det.reason})"
+    assert err.max() <= 1.0, f"{int(np.sum(err > 1))} corners more than 1 px off (max {err.max():.2f})"
