@@ -1,13 +1,17 @@
 """Benchmark: heated-checkerboard detection on synthetic thermal sets, side by side with OpenCV's
 findChessboardCornersSB and mrgingham, on the same images.
 
-    .venv/bin/python bench/bench_detection.py [--n 40] [--seeds 100,200,300] [--work build/bench_detection]
+    .venv/bin/python bench/bench_detection.py [--n 40] [--seeds 100,200,300] [--families opencv8,kannala-brandt,...]
+        [--work build/bench_detection]
 
 Each seed renders its own four sets (under WORK/seed<S>/ when more than one seed is given); the
 table comes per seed and then pooled over the seeds (boards and corners summed, RMS over all corners,
 median time over all images).
 
-Sets: "real" and "hard" with the default 10x7 board, and "real" / "hard" with a 7x7 board (mrgingham
+Truth lenses (--families, default all of calibration/synth/truth_families.py: opencv8, the solver's
+own family and this bench's anchor, then kannala-brandt, stereographic and boson-published): each
+family renders its own sets, under WORK/<family>/ (the opencv8 sets stay where they were, WORK/ or
+WORK/seed<S>/). Sets: "real" and "hard" with the default 10x7 board, and "real" / "hard" with a 7x7 board (mrgingham
 only detects square boards). Per detector and set: share of fully visible, unoccluded boards found
 complete; corner RMS error against the truth (px, complete boards only, best of the two 180 deg
 orderings for the other tools since their order convention differs); corners > 1 px off; ms per image
@@ -40,6 +44,7 @@ cv2.setNumThreads(1)
 
 from calibration.detect import detect_corners  # noqa: E402
 from calibration.synth import render_dataset    # noqa: E402
+from calibration.synth.truth_families import FAMILIES, truth_lens  # noqa: E402
 
 
 def to8(img):
@@ -183,26 +188,40 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=100, help="one seed (ignored with --seeds)")
     ap.add_argument("--seeds", type=str, default="", help="comma-separated seeds, e.g. 100,200,300")
     ap.add_argument("--work", type=Path, default=Path("build/bench_detection"))
+    ap.add_argument("--families", type=str, default=",".join(FAMILIES),
+                    help=f"comma-separated truth lenses (default {','.join(FAMILIES)})")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--reuse", action="store_true",
+                    help="read sets already rendered under WORK (same --n and seed) instead of rendering them again")
     ap.add_argument("--only-ours", action="store_true", help="diagnostics: run our detector only")
     ap.add_argument("--missed", action="store_true",
                     help="diagnostics: name the fully visible boards ours missed, and any mislabelled corners")
     args = ap.parse_args(argv)
     sets = [("real", (10, 7)), ("hard", (10, 7)), ("real", (7, 7)), ("hard", (7, 7))]
     seeds = [int(x) for x in args.seeds.split(",") if x.strip()] or [args.seed]
+    families = [x.strip() for x in args.families.split(",") if x.strip()]
+    for fam in families:
+        if fam not in FAMILIES:
+            ap.error(f"--families {fam}: unknown truth lens; choose from {', '.join(FAMILIES)}")
     table = []
-    for seed in seeds:
-        table += run_seed(args, seed, sets, args.work / f"seed{seed}" if len(seeds) > 1 else args.work)
+    for fam in families:
+        base = args.work if fam == "opencv8" else args.work / fam
+        if len(families) > 1:
+            print(f"\ntruth lens {fam}", flush=True)
+        for seed in seeds:
+            rows = run_seed(args, seed, sets, base / f"seed{seed}" if len(seeds) > 1 else base,
+                            None if fam == "opencv8" else truth_lens(fam))
+            table += [dict(r, family=fam) for r in rows]
     if len(seeds) > 1:
         print(f"\npooled over seeds {','.join(map(str, seeds))}")
         pooled = []
-        for diff, board in sets:
+        for fam, (diff, board) in ((f, s) for f in families for s in sets):
             name = f"{diff} {board[0]}x{board[1]}"
             for det in ("ours", "opencv_sb", "mrgingham"):
-                rows = [r for r in table if r["set"] == name and r["detector"] == det]
+                rows = [r for r in table if r["set"] == name and r["detector"] == det and r["family"] == fam]
                 if not rows:
                     continue
-                row = dict(seed="pooled", set=name, detector=det,
+                row = dict(seed="pooled", family=fam, set=name, detector=det,
                            ms=float(np.median([r["ms"] for r in rows])),
                            **{k: sum(r[k] for r in rows) for k in ("full", "found", "wrong", "n_err", "sse")})
                 row["rate"] = row["found"] / max(row["full"], 1)
@@ -213,7 +232,7 @@ def main(argv=None):
                     extra = (f"  all boards: {row['reported']} corners, mislabelled {row['mislabelled']}; "
                              f"image-corner zones {row['zone_found']}/{row['zone']}")
                 pooled.append(row)
-                print(f"{name:12s} {det:10s} complete {row['found']:3d}/{row['full']:3d} ({100 * row['rate']:5.1f}%)  "
+                print(f"{fam[:8]:8s} {name:12s} {det:10s} complete {row['found']:3d}/{row['full']:3d} ({100 * row['rate']:5.1f}%)  "
                       f"rms {row['rms']:.3f} px  wrong>1px {row['wrong']:4d}  {row['ms']:7.1f} ms/image{extra}", flush=True)
         table += pooled
     args.work.mkdir(parents=True, exist_ok=True)
@@ -221,13 +240,17 @@ def main(argv=None):
     return 0
 
 
-def run_seed(args, seed, sets, work):
+def run_seed(args, seed, sets, work, lens=None):
+    """The four sets of one seed through ``lens`` (None: the nominal OPENCV8 lens)."""
     if len(args.seeds.split(",")) > 1:
         print(f"\nseed {seed}", flush=True)
     table = []
     for diff, board in sets:
         folder = work / f"{diff}_{board[0]}x{board[1]}"
-        truth = render_dataset(folder, n=args.n, difficulty=diff, board=board, seed=seed, show_progress=False)
+        truth = json.loads((folder / "truth.json").read_text()) if (folder / "truth.json").exists() else {}
+        if not (args.reuse and truth.get("seed") == seed and len(truth.get("images", ())) == args.n):
+            truth = render_dataset(folder, n=args.n, difficulty=diff, board=board, seed=seed, lens=lens,
+                                   show_progress=False)
         files = [im["file"] for im in truth["images"]]
         partial, reasons = {}, {}
         for name, fn in (("ours", lambda: run_ours(folder, files, board, partial, reasons)),
