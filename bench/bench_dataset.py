@@ -13,7 +13,8 @@
    code issue 15 item 6 calls "today's"; repeat the option for several, e.g. ``--previous b7c0534 --previous
    HEAD``; each in a copy of this tree where only the export code differs) beside this tree's, on the same
    recording, alternating, after one untimed warm-up each (numba compiles into each tree's cache); samples/s end to
-   end (wall clock, indexing included) and the ratios; then every file of each previous output compared with this
+   end (wall clock, indexing included) and the ratios, and the CPU seconds of each run (the command and its workers:
+   what a shared machine's other load disturbs least); then every file of each previous output compared with this
    tree's (bytes; PNGs that differ are decoded and compared).
    A full-size recording: ``platform_tools simulate-rig --out DIR --duration 12 --scale 1``.
 
@@ -91,11 +92,15 @@ def previous_tree(tmp: Path, rev: str = BASELINE) -> Path:
     return tree
 
 
-def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int) -> tuple[float, int]:
-    """(seconds, samples) of one `platform_tools export` run with ``tree``'s code."""
+def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int) -> tuple[float, int, float]:
+    """(wall seconds, samples, CPU seconds) of one `platform_tools export` run with ``tree``'s code. The CPU time
+    (user + system, of the command and its workers: getrusage of reaped children) is the figure a shared machine
+    disturbs least: other users' load stretches the wall clock, not the work done."""
+    import resource
     import shutil
     import subprocess
     shutil.rmtree(out, ignore_errors=True)
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
     env = dict(os.environ, PYTHONPATH=str(tree))
     for var in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         env.pop(var, None)
@@ -107,7 +112,9 @@ def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int
     dt = time.perf_counter() - t
     if r.returncode != 0:
         raise SystemExit(f"{tree}: export failed: {r.stderr.strip().splitlines()[-1:]}")
-    return dt, json.loads(r.stdout)["samples"]
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime + after.ru_stime) - (ru.ru_utime + ru.ru_stime)
+    return dt, json.loads(r.stdout)["samples"], cpu
 
 
 def compare_outputs(a: Path, b: Path) -> dict:
@@ -135,15 +142,18 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
         for name, tree in trees.items():          # warm-up: numba compiles into each tree's cache
             run_export(tree, recording, tmp / f"warm-{name}", max(rate / 4, 0.25), workers)
         times = {n: [] for n in trees}
+        cpu = {n: [] for n in trees}
         samples = {}
         for _ in range(repeats):
             for name, tree in trees.items():
-                dt, samples[name] = run_export(tree, recording, tmp / f"out-{name}", rate, workers)
+                dt, samples[name], c = run_export(tree, recording, tmp / f"out-{name}", rate, workers)
                 times[name].append(dt)
+                cpu[name].append(c)
         sps = {n: samples[n] / min(t) for n, t in times.items()}
         return {"recording": str(recording), "rate_hz": rate, "workers": workers, "samples": samples,
-                "seconds": times, "samples_per_s": sps,
+                "seconds": times, "samples_per_s": sps, "cpu_seconds": cpu,
                 "ratio": {rev: sps["new"] / sps[rev] for rev in revs},
+                "cpu_ratio": {rev: min(cpu[rev]) * samples["new"] / (min(cpu["new"]) * samples[rev]) for rev in revs},
                 "outputs": {rev: compare_outputs(tmp / f"out-{rev}", tmp / "out-new") for rev in revs}}
 
 
@@ -167,10 +177,12 @@ def main(argv=None) -> int:
               f"{len(r['seconds']['new'])}:")
         for n in r["seconds"]:
             print(f"  {n:<9} {r['samples'][n]:>5} samples in {min(r['seconds'][n]):7.1f} s: "
-                  f"{r['samples_per_s'][n]:6.2f} samples/s  (runs: {', '.join(f'{t:.1f}' for t in r['seconds'][n])} s)")
+                  f"{r['samples_per_s'][n]:6.2f} samples/s  (runs: {', '.join(f'{t:.1f}' for t in r['seconds'][n])} s;"
+                  f" CPU {', '.join(f'{t:.1f}' for t in r['cpu_seconds'][n])} s)")
         for rev, ratio in r["ratio"].items():
             o = r["outputs"][rev]
-            print(f"  ratio new / {rev}: {ratio:.2f}x")
+            print(f"  ratio new / {rev}: {ratio:.2f}x in samples/s (wall clock), {r['cpu_ratio'][rev]:.2f}x in "
+                  f"samples per CPU second")
             print(f"    outputs: {o['files']} files, {o['identical_bytes']} identical bytes, {len(o['same_pixels'])} "
                   f"PNGs with other bytes but the same pixels, {len(o['different'])} different "
                   f"({', '.join(o['different'][:5])}), only in {rev} {len(o['only_in_previous'])} "

@@ -125,8 +125,9 @@ def render(manifest: dict, rows: list[dict], command: list[str] | None) -> str:
               f"calibration's extrinsics, projected with its lens; z-buffer tolerance "
               f"{p['zbuffer_tolerance_percent']:g} %, bilinear splatting, a pixel valid (mask 255) with at least "
               f"{p['min_coverage']:g} of a fully covered pixel's weight; no colour where there was no depth.",
-              "- PNG: zlib level " + ("OpenCV's default (1, RLE)" if p.get("png_compression_level") is None
-                                      else str(p["png_compression_level"])) + ".", ""]
+              "- PNG: " + ("the export's own writer (ISA-L deflate level 1, UP filter)"
+                           if p.get("png_compression_level") is None
+                           else f"OpenCV's libpng, zlib level {p['png_compression_level']}") + ".", ""]
     return "\n".join(lines)
 
 

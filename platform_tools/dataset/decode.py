@@ -8,7 +8,7 @@ import itertools
 import cv2
 import numpy as np
 
-from .recording import Recording, header_stamp
+from .recording import Recording, header_stamp, mcap_reader
 
 #: the streams the export reads images of
 IMAGE_STREAMS = ("zed_left", "zed_right", "zed_depth", "thermal_left", "thermal_right")
@@ -67,13 +67,12 @@ def windows(log_ns, spans) -> list[tuple[int, int]]:
 def iter_frames(files: list[str], wanted: dict[tuple[str, int], object], log_ns):
     """Decode the wanted (topic, header stamp) messages, logged at the given log times, of the given files; only the
     MCAP chunks holding one of those log times are decompressed, each once (:func:`windows`)."""
-    from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
     topics = sorted({t for t, _ in wanted})
     factory, decoders = DecoderFactory(), {}
     for f in files:
         with open(f, "rb") as fh:
-            reader = make_reader(fh)
+            reader = mcap_reader(fh, f)
             summary = reader.get_summary()
             spans = [(c.message_start_time, c.message_end_time) for c in (summary.chunk_indexes if summary else [])]
             for lo_ns, hi_ns in windows(log_ns, spans):

@@ -44,9 +44,9 @@ from typing import Callable
 from platform_tools.rig import atomic
 from . import card, thermal8
 from .calib import CalibrationError, at_recorded_size, for_recording, load_calibration, model_to_dict, zed_right
-from .chunk import KINDS, TMP_SUFFIX, process_chunk
+from .chunk import KINDS, TMP_SUFFIX, process_chunk, warm_up
 from .decode import IMAGE_STREAMS, probe_sizes
-from .engines import ENGINES, EngineError
+from .engines import ENGINES, EngineError, started
 from .pairing import plan
 from .recording import RecordingError, open_recording, telemetry_rows
 from .stereo import BUILT_IN, StereoError, load_plugin
@@ -203,7 +203,16 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
            on_chunk: Callable[[str], None] | None = None, topic_map=None, command: list[str] | None = None) -> dict:
     """``calibration``: a folder of models overriding the recordings' camera_info and the nominal models;
     ``topic_map``: a :class:`.layout.Layout` (``--topics``) instead of the detected layout; ``command``: the
-    command line, for the dataset card."""
+    command line, for the dataset card. A pool's workers start (and load their kernels) while the recordings
+    are indexed (engines.started)."""
+    with started(engine, workers, warm_up) as pool:
+        return _export(recordings, out, rig, params, calibration=calibration, engine=engine, workers=workers,
+                       scheduler=scheduler, recover=recover, on_chunk=on_chunk, topic_map=topic_map,
+                       command=command, pool=pool)
+
+
+def _export(recordings, out, rig, params, *, calibration, engine, workers, scheduler, recover, on_chunk, topic_map,
+            command, pool) -> dict:
     out = Path(out)
     if params.depth not in BUILT_IN:
         try:
@@ -297,7 +306,7 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
         raise ExportError(f"engine {engine!r}: expected {', '.join(ENGINES)}")
     if todo:
         try:
-            run(process_chunk, todo, finished, workers, scheduler)
+            run(process_chunk, todo, finished, workers, scheduler, pool)
         except (EngineError, RecordingError, StereoError) as exc:
             raise ExportError(str(exc)) from None
         finally:                          # interrupted: the workers are stopped; their unfinished files go

@@ -30,7 +30,9 @@ log = logging.getLogger(__name__)
 
 #: rig streams by their short name -> attribute of rig.desc.on_device.topics
 STREAMS = ("zed_left", "zed_right", "zed_depth", "zed_imu", "thermal_left", "thermal_right")
-CAMERAS = ("zed_left", "zed_right", "thermal_left", "thermal_right")
+#: the two Bosons' streams
+THERMAL = ("thermal_left", "thermal_right")
+CAMERAS = ("zed_left", "zed_right") + THERMAL
 STATUS = ("thermal_left_status", "thermal_right_status")
 RECOVERED_SUFFIX = ".recovered.mcap"
 #: the first bytes of an SQLite 3 database (rosbag2's sqlite3 storage, ``.db3`` files)
@@ -150,12 +152,39 @@ def mcap_files(path: Path) -> tuple[str, list[Path]]:
     return path.name, files
 
 
+#: MCAP summaries read in this process, by (path, size, modification time): the summary (chunk index, channels,
+#: schemas; 0.2 s of CPU for a 12 s full-size recording) is read once per file version, not by every reader of it
+#: (the truncation check, the channels, the index, the size probe, each chunk of a worker)
+_summaries: dict[tuple[str, int, int], object] = {}
+#: how many files' summaries a process keeps
+SUMMARIES_KEPT = 8
+
+
+def mcap_reader(fh, path):
+    """An ``mcap`` SeekingReader of the open file ``fh`` (the file at ``path``) with its summary read once per
+    process and file version. Errors are the reader's (McapError, EOFError, struct.error, ValueError)."""
+    import os
+
+    from mcap.reader import SeekingReader
+    st = os.stat(path)
+    key = (str(path), st.st_size, st.st_mtime_ns)
+    reader = SeekingReader(fh)
+    if key in _summaries:
+        reader._summary = _summaries[key]       # the reader's own cache (mcap.reader.SeekingReader.get_summary)
+        return reader
+    summary = reader.get_summary()
+    if summary is not None:                     # a truncated file has none: read again, it may be recovered
+        while len(_summaries) >= SUMMARIES_KEPT:
+            _summaries.pop(next(iter(_summaries)))
+        _summaries[key] = summary
+    return reader
+
+
 def _is_truncated(path: Path) -> bool:
     from mcap.exceptions import McapError
-    from mcap.reader import make_reader
     try:
         with open(path, "rb") as f:
-            return make_reader(f).get_summary() is None
+            return mcap_reader(f, path).get_summary() is None
     except (McapError, EOFError, struct.error, ValueError):
         return True
 
@@ -235,12 +264,11 @@ def telemetry_rows(rig, width: int, height: int) -> int:
 def _channels(files: list[Path]) -> dict[str, tuple[str, Path]]:
     """topic -> (schema name, first file holding it), from the MCAP summaries."""
     from mcap.exceptions import McapError
-    from mcap.reader import make_reader
     out: dict[str, tuple[str, Path]] = {}
     for f in files:
         try:
             with open(f, "rb") as fh:
-                summary = make_reader(fh).get_summary()
+                summary = mcap_reader(fh, f).get_summary()
         except (McapError, EOFError, struct.error, ValueError) as exc:
             raise RecordingError(f"{f}: damaged MCAP ({type(exc).__name__}: {exc}); "
                                  f"run again with --recover to salvage what is readable") from None
@@ -262,7 +290,6 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
     """Index a recording's rig streams (and the thermal FFC status, and its camera_info); ``topic_map``: a
     :class:`.layout.Layout` from ``--topics`` (default: detected)."""
     from mcap.exceptions import McapError
-    from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
 
     from . import ffcstatus
@@ -304,7 +331,7 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
     for fi, f in enumerate(files):
         try:
             with open(f, "rb") as fh:
-                reader = make_reader(fh)
+                reader = mcap_reader(fh, f)
                 for schema, channel, msg in reader.iter_messages(topics=wanted, log_time_order=True):
                     s = by_topic.get(channel.topic)
                     if s is not None:

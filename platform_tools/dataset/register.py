@@ -147,21 +147,32 @@ class Result:
         return np.clip(np.rint(self.image), 0, 255).astype(np.uint8)
 
 
+def zed_rays(zed) -> np.ndarray:
+    """(H, W, 2) float64: (x/z, y/z) of every pixel's ray of a ZED model (``mrcal.cameramodel``)."""
+    import mrcal
+    lensmodel, k = zed.intrinsics()
+    W, H = imagersize(zed)
+    u, v = np.meshgrid(np.arange(W, dtype=float), np.arange(H, dtype=float))
+    ray = mrcal.unproject(np.stack([u, v], -1), lensmodel, k)
+    return np.ascontiguousarray(ray[..., :2] / ray[..., 2:3])
+
+
 class Registrar:
     """RGB of one ZED left image size into one thermal camera. ``zed`` and ``thermal`` are
     ``mrcal.cameramodel``s already at the recorded sizes; ``rt_thermal_zed`` (6,) maps ZED left optical
     points into the thermal optical frame (metres)."""
 
     def __init__(self, zed, thermal, rt_thermal_zed: np.ndarray,
-                 tolerance_percent: float, min_coverage: float = 0.5):
+                 tolerance_percent: float, min_coverage: float = 0.5, rays: np.ndarray | None = None):
+        """``rays``: :func:`zed_rays` of ``zed``, when the caller already has them (one ZED, two thermal views)."""
         import mrcal
         self.zed, self.thermal = zed, thermal
         zed_lensmodel, zed_k = zed.intrinsics()
         self.lensmodel, self.intrinsics = thermal.intrinsics()       # the thermal lens
+        self.rays = zed_rays(zed) if rays is None else rays
         W, H = imagersize(zed)
-        u, v = np.meshgrid(np.arange(W, dtype=float), np.arange(H, dtype=float))
-        ray = mrcal.unproject(np.stack([u, v], -1), zed_lensmodel, zed_k)
-        self.rays = np.ascontiguousarray(ray[..., :2] / ray[..., 2:3])       # (x/z, y/z) per pixel
+        if self.rays.shape != (H, W, 2):
+            raise ValueError(f"rays of shape {self.rays.shape} for a {W}x{H} ZED model")
         self.R = mrcal.R_from_r(rt_thermal_zed[:3])
         self.t = np.array(rt_thermal_zed[3:], float)
         self.kind = _KINDS.get(self.lensmodel, KIND_MRCAL)
@@ -255,6 +266,16 @@ def _finish_u8(acc, wsum, zacc, min_weight, image, mask, depth_mm):
                 for ch in range(C):
                     image[r, c, ch] = 0
     return n
+
+
+def warm_up() -> None:
+    """Load this module's numba kernels (from numba's disk cache; compiled the first time) in this process by one
+    :meth:`Registrar.register_u8` of a 4x3 depth map between two pinhole cameras: the same call, so the same argument
+    types, as the export's (float32 depth, uint8 BGR, float64 accumulators), and no other specialisation."""
+    import mrcal
+    cam = mrcal.cameramodel(intrinsics=("LENSMODEL_PINHOLE", np.array([2.0, 2.0, 1.5, 1.0])),
+                            imagersize=np.array([4, 3]))
+    Registrar(cam, cam, np.zeros(6), 2.0).register_u8(np.ones((3, 4), np.float32), np.zeros((3, 4, 3), np.uint8))
 
 
 def _finish(acc, wsum, zacc, min_weight) -> Result:

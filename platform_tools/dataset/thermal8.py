@@ -10,7 +10,10 @@ with type "firestereo"):
 The parameters come from ``processing.thermal_8bit``. The result is bit-identical to that
 definition (tests/dataset check it against a direct transcription); it is only faster: order
 statistics from a 65536-bin histogram instead of a sort (only when the clip applies), and step 2
-as a lookup table over the counts between lo and hi. One deliberate difference: a flat frame
+as a lookup table over the counts between lo and hi, applied by a numba kernel compiled (or loaded from numba's
+cache) on the first conversion: numba is imported then, not with this module, so a process that only plans an
+export (the parent, which needs :class:`Params`) never pays numba's import (0.7 s of CPU; docs/dataset.md "Speed").
+One deliberate difference: a flat frame
 (hi == lo), which the original turns into
 NaN casts, becomes all zeros.
 """
@@ -19,7 +22,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import cv2
-import numba
 import numpy as np
 
 
@@ -77,15 +79,26 @@ def to_8bit_minmax(raw: np.ndarray, p: Params) -> tuple[np.ndarray, tuple[int, i
     # the same float64 expression as the original, evaluated once per count value in [lo, hi]
     lut = ((np.arange(lo, hi + 1, dtype=np.float64) - lo) / (hi - lo) * 255.0).astype(np.uint8)
     out = np.empty(raw.shape, np.uint8)
-    _apply(raw.reshape(-1), lut, lo, hi, out.reshape(-1))
+    _kernel()(raw.reshape(-1), lut, lo, hi, out.reshape(-1))
     return out, (lo, hi, clipped)
 
 
-@numba.njit(cache=True)
 def _apply(raw, lut, lo, hi, out):
+    """out = lut[clip(raw, lo, hi) - lo]: counts at or below lo take lut[0], at or above hi lut[hi - lo]."""
     for i in range(raw.shape[0]):
         v = raw[i]
         out[i] = lut[0] if v <= lo else (lut[hi - lo] if v >= hi else lut[v - lo])
+
+
+_compiled: list = []
+
+
+def _kernel():
+    """:func:`_apply` compiled by numba (cached on disk like every kernel of this package), imported on first use."""
+    if not _compiled:
+        import numba
+        _compiled.append(numba.njit(cache=True)(_apply))
+    return _compiled[0]
 
 
 def to_8bit(raw: np.ndarray, p: Params) -> tuple[np.ndarray, dict]:

@@ -1,4 +1,4 @@
-"""The export's reading and writing pieces: the read windows (decode.windows), the PNG level (chunk.png_params),
+"""The export's reading and writing pieces: the read windows (decode.windows), the PNG level (chunk.png_bytes),
 the temporary files a stopped worker leaves and which of them a resumed export removes (export.remove_partial)."""
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from platform_tools.dataset.chunk import _write_png, png_params, tmp_name
+from platform_tools.dataset.chunk import _write_png, tmp_name
 from platform_tools.dataset.decode import windows
 from platform_tools.dataset.export import remove_partial
 
@@ -63,7 +63,7 @@ def test_png_level_changes_the_bytes_not_the_pixels(tmp_path):
     sizes = {}
     for level in (None, 0, 9):
         path = tmp_path / f"{level}.png"
-        _write_png(path, img16, png_params(level))
+        _write_png(path, img16, level)
         back = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
         assert back.dtype == np.uint16 and np.array_equal(back, img16)
         sizes[level] = path.stat().st_size
