@@ -180,25 +180,13 @@ def test_the_card_lowered_back_to_1_mm_fails_naming_the_intake_and_the_card(asm)
     assert r.data["orin_inlet_gap"]["stl_mm"] == pytest.approx(1.0, abs=0.01)
 
 
-class _Boxes:
-    """The broad phase trimesh's ray_triangle_id asks of an r-tree (rtree is not installed)."""
-
-    def __init__(self, tri: np.ndarray):
-        self.lo, self.hi = tri.min(axis=1), tri.max(axis=1)
-        self.bounds = np.concatenate([self.lo.min(axis=0), self.hi.max(axis=0)])
-
-    def intersection(self, b):
-        b = np.asarray(b)
-        return np.flatnonzero(np.all(self.lo <= b[3:], axis=1) & np.all(self.hi >= b[:3], axis=1))
-
-
 @pytest.mark.slow
 def test_trimesh_reading_the_exported_lid_finds_the_b_rep_s_roof_area(asm, tmp_path):
     """The lid exported to STL, read by trimesh, cast through by trimesh's ray caster on a grid of its
     own (0.2 mm, not aligned with the slots), over the roof's two inner rows of slots on the left: their
     free area equals the B-rep's within the grid's edge error (half a cell along every slot edge)."""
     import cadquery as cq
-    from trimesh.ray.ray_triangle import ray_triangle_id
+    from tests.cad.trimesh_rays import ray_hits
     from cad.airflow import brep_free_area_mm2
     path = tmp_path / "case_lid.stl"
     lid = asm.node("case_lid").shape(asm.cache)
@@ -222,7 +210,7 @@ def test_trimesh_reading_the_exported_lid_finds_the_b_rep_s_roof_area(asm, tmp_p
     pts = np.column_stack([xx[inside], yy[inside]])
     origins = np.column_stack([pts, np.full(len(pts), lo[2] - 1.0)])
     dirs = np.tile([0.0, 0.0, 1.0], (len(pts), 1))
-    _, ray, loc = ray_triangle_id(tri, origins, dirs, triangles_normal=normals, tree=_Boxes(tri), multiple_hits=True)
+    _, ray, loc = ray_hits(tri, normals, origins, dirs)
     stopped = np.zeros(len(pts), bool)
     stopped[ray[loc[:, 2] <= hi[2] + 1.0]] = True
     free = float((~stopped).sum()) * pitch * pitch

@@ -12,7 +12,7 @@ import pytest
 from cad import walls
 
 trimesh = pytest.importorskip("trimesh")
-from trimesh.ray.ray_triangle import ray_triangle_id  # noqa: E402
+from tests.cad.trimesh_rays import ray_hits  # noqa: E402
 
 #: the mesh path and the B-rep path agree on a flat wall's thickness within this (mm): the STL's
 #: vertices lie on the exact faces, so a plane-to-plane ray differs only by rounding
@@ -27,19 +27,6 @@ SHARP_RAD = 0.35
 def printer(rig):
     p = rig.desc.printing.printer
     return p.nozzle_mm * p.min_wall_nozzles, p.nozzle_mm / 2     # the minimum wall, the edge inset
-
-
-class _Boxes:
-    """The broad phase trimesh's ray_triangle_id asks of an r-tree (the rtree package is not installed):
-    ``bounds`` and ``intersection(box)`` over the triangles' boxes, in numpy."""
-
-    def __init__(self, tri: np.ndarray):
-        self.lo, self.hi = tri.min(axis=1), tri.max(axis=1)
-        self.bounds = np.concatenate([self.lo.min(axis=0), self.hi.max(axis=0)])
-
-    def intersection(self, b):
-        b = np.asarray(b)
-        return np.flatnonzero(np.all(self.lo <= b[3:], axis=1) & np.all(self.hi >= b[:3], axis=1))
 
 
 def _distance_to_segments(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -67,7 +54,7 @@ def mesh_thickness(mesh, edge_inset: float) -> tuple[np.ndarray, np.ndarray]:
     tri, n, c = mesh.triangles, mesh.face_normals, mesh.triangles_center
     keep = _kept(mesh, edge_inset)
     origins, dirs = c[keep] - n[keep] * 1e-4, -n[keep]
-    _, ray, loc = ray_triangle_id(tri, origins, dirs, triangles_normal=n, tree=_Boxes(tri), multiple_hits=True)
+    _, ray, loc = ray_hits(tri, n, origins, dirs)
     d = ((loc - origins[ray]) * dirs[ray]).sum(axis=1)
     t = np.full(len(origins), np.inf)
     ok = d > 1e-6
