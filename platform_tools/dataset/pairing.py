@@ -19,12 +19,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .layout import NO_DEPTH_HINT
-from .recording import Recording
+from .recording import THERMAL, Recording
 from . import clocksteps
 from .sync import corrected_times, ffc_periods, find_clock_steps, pair_residuals, triggers
 
 OTHERS = ("zed_right", "zed_depth", "thermal_left", "thermal_right")
-THERMAL = ("thermal_left", "thermal_right")
 
 
 @dataclass

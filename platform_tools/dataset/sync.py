@@ -194,7 +194,7 @@ def analyse(rec: Recording, rig, limits: Limits) -> dict:
     rate = rig.desc.sync.rate_hz
     period = 1e9 / rate
     rec.require("thermal_left", "thermal_right", why="sync-check needs both thermal streams")
-    steps = find_clock_steps(rec, period)
+    steps = host_steps = find_clock_steps(rec, period)      # the host's steps (IMU, or common to every camera)
     # each stream's own clock steps (trigger.py, sized by clocksteps.py), taken out of that stream's stamps
     try:
         assignment, trig_err = triggers(rec, rig), None
@@ -224,7 +224,7 @@ def analyse(rec: Recording, rig, limits: Limits) -> dict:
         t = times[name]
         streams[name] = {"topic": rec.streams[name].topic} | stream_report(t, period, limits.drop_interval_factor)
     if rec.has("zed_imu"):
-        t = corrected(rec.streams["zed_imu"].stamp_ns, find_clock_steps(rec, period))
+        t = corrected(rec.streams["zed_imu"].stamp_ns, host_steps)
         d = np.diff(t)
         streams["zed_imu"] = {"topic": rec.streams["zed_imu"].topic, "frames": int(len(t)),
                               "interval_ms": _stats_ms(d)}
