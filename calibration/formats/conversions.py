@@ -35,9 +35,15 @@ def unprojector(lens):
 
 def projector(lens):
     """(..., 3) rays -> (..., 2) pixels of ``lens`` (as :func:`unprojector`)."""
-    lensmodel, params = lens.intrinsics()
+    return lens_projector(*lens.intrinsics())
+
+
+def lens_projector(lensmodel: str, params: np.ndarray):
+    """(..., 3) rays -> (..., 2) pixels of the lens ``lensmodel`` (mrcal's name, or Kannala-Brandt's) with
+    intrinsics ``params``."""
+    params = np.asarray(params, dtype=float)
     if lensmodel == kb.NAME:
-        return lambda v: kb.project(v, params)
+        return lambda v: kb.project(np.asarray(v, dtype=float), params)
     import mrcal
     return lambda v: mrcal.project(np.ascontiguousarray(v, dtype=float), lensmodel, params)
 

@@ -30,7 +30,7 @@ from typing import Callable
 import numpy as np
 
 from calibration.detect.circles import disc_centroid_bias
-from calibration.lens import kannala_brandt as kb
+from calibration.formats.conversions import lens_projector
 
 from .mrcal_solver import Solution
 from .observations import BoardObservations
@@ -54,12 +54,7 @@ def check_radius(radius_m: float, spacing_m: float) -> float:
 
 def projector(solution: Solution) -> Callable[[np.ndarray], np.ndarray]:
     """points (..., 3) in the camera frame -> pixels (..., 2) through ``solution``'s lens."""
-    if solution.lensmodel == kb.NAME:
-        p = np.asarray(solution.intrinsics, float)
-        return lambda v: kb.project(np.asarray(v, float), p)
-    import mrcal
-    lm, intr = solution.lensmodel, np.asarray(solution.intrinsics, float)
-    return lambda v: mrcal.project(np.ascontiguousarray(v, dtype=float), lm, intr)
+    return lens_projector(solution.lensmodel, solution.intrinsics)
 
 
 def board_poses(solution: Solution) -> np.ndarray:
