@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import sys
 
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
@@ -22,6 +21,7 @@ from sensor_msgs.msg import Image
 
 from firmware.device.clockstep import ClockSteps
 from firmware.device.ffc_status import StatusTracker
+from firmware.device.rosnode import spin
 
 
 def to_msg(d: dict) -> DiagnosticArray:
@@ -61,17 +61,7 @@ class FfcStatusNode(Node):
 
 
 def main(argv: list[str] | None = None) -> int:
-    rclpy.init(args=sys.argv if argv is None else argv)
-    node = FfcStatusNode()
-    try:
-        rclpy.spin(node)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
-    return 0
+    return spin(FfcStatusNode, argv)
 
 
 if __name__ == "__main__":

@@ -13,13 +13,13 @@ from __future__ import annotations
 import sys
 import time
 
-import rclpy
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import CameraInfo
 from std_msgs.msg import Float64, String
 
 from firmware.device.health import CameraHealth
+from firmware.device.rosnode import spin
 
 
 class HealthNode(Node):
@@ -48,17 +48,7 @@ class HealthNode(Node):
 
 
 def main(argv: list[str] | None = None) -> int:
-    rclpy.init(args=sys.argv if argv is None else argv)
-    node = HealthNode()
-    try:
-        rclpy.spin(node)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
-    return 0
+    return spin(HealthNode, argv)
 
 
 if __name__ == "__main__":

@@ -156,7 +156,8 @@ def test_the_node_module_is_only_glue():
     tree = ast.parse(src)
     imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)} | \
         {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
-    assert {"rclpy", "sensor_msgs.msg", "diagnostic_msgs.msg", "firmware.device.ffc_status"} <= imported
+    assert {"rclpy.node", "sensor_msgs.msg", "diagnostic_msgs.msg", "firmware.device.ffc_status",
+            "firmware.device.rosnode"} <= imported
     assert "StatusTracker" in src and "def main" in src
 
 
