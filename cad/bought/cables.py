@@ -1,5 +1,6 @@
 """The cable table (``cables.yaml``): diameter, minimum bend radius, plug length, stock lengths and
-service slack of every kind of cable a route is swept with. Typed and loaded as the fastener table is."""
+service slack of every kind of cable a route is swept with, and the envelopes of the right-angle plugs
+that go into the Orin's rear ports. Typed and loaded as the fastener table is."""
 from __future__ import annotations
 
 import math
@@ -44,9 +45,27 @@ class CableKind:
 
 
 @dataclass(frozen=True)
+class PlugEnvelope:
+    """A right-angle plug in a port, as the room it takes behind the port face: ``depth_mm`` back from the
+    face (the overmould), ``width_mm`` across the port, ``reach_mm`` from the port's centre to the face the
+    cable leaves from (along the side it exits towards), ``height_mm``; the cable's axis leaves that face
+    ``exit_depth_mm`` behind the port face, at the port's height. The overmould holds the cable's strain
+    relief: the cable may bend as soon as it leaves it."""
+    description: str
+    depth_mm: Annotated[float, Gt(0)]
+    width_mm: Annotated[float, Gt(0)]
+    reach_mm: Annotated[float, Gt(0)]
+    height_mm: Annotated[float, Gt(0)]
+    exit_depth_mm: Annotated[float, Gt(0)]
+    source: str
+    confidence: Literal["datasheet", "measured", "second_hand", "estimate"]
+
+
+@dataclass(frozen=True)
 class CableTable:
     schema_version: Literal[1]
     kinds: Mapping[str, CableKind]
+    plugs: Mapping[str, PlugEnvelope]
 
 
 @lru_cache(maxsize=None)

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 from platform_tools.rig import Rig
 
+from cad.bought.cables import cable_table
 from cad.geom import Bounds, Vec3
 
 from .cameras import Cameras, fov_half_angles_deg
@@ -52,10 +53,26 @@ class Case:
     vents: tuple[Bounds, ...]   # cutting boxes of the vent slots
 
 
+def rear_plug_room_mm(fits: Fits) -> float:
+    """How far the rear wall's inner face stands behind the Orin's port face: the deepest right-angle plug
+    of the cable table (``plugs`` of ``cad/bought/cables.yaml``: every one goes into a rear port) plus the
+    component clearance, never less than the clearance alone.
+
+    Why the whole rear wall and not a pocket over the port window (docs/cad.md, "The Orin's rear ports"): a
+    pocket closed above in the tray has a roof over the plugs, and the Orin goes into the tray from above
+    with its plugs in (they would hit the roof); a pocket open above needs the lid over it, and the lid
+    prints on its rear face, which must stay one flat face. Moved back whole, the wall keeps the port window
+    (a notch open at the split, the external access), the lid stays flat on the bed, and nothing inside
+    moves."""
+    plugs = cable_table().plugs.values()
+    return max([fits.clear] + [p.depth_mm + fits.clear for p in plugs])
+
+
 def place_shell(rig: Rig, fits: Fits, cameras: Cameras, fans: dict[str, Fan], compute: Compute,
                 floor_z: float) -> Shell:
-    """The interior just holds the cameras, heat sinks, fans and the computer; the split sits a
-    clearance under the ZED X; the lid is tall enough for the side handles' pads."""
+    """The interior just holds the cameras, heat sinks, fans and the computer with the plugs in its rear
+    ports (:func:`rear_plug_room_mm`); the split sits a clearance under the ZED X; the lid is tall enough
+    for the side handles' pads."""
     e = rig.desc.enclosure
     clear, gap, wall = fits.clear, fits.gap, fits.wall
     zed_box = cameras.zed_box
@@ -67,7 +84,8 @@ def place_shell(rig: Rig, fits: Fits, cameras: Cameras, fans: dict[str, Fan], co
     if e.handles.sides:  # the lid's side walls carry the side handles' feet and pads
         top_in = max(top_in, split_z + e.handles.grip_diameter_mm + 2 * PAD_MARGIN_MM + 2 * wall + LID_SIDE_MARGIN_MM)
     front_out = zed_box.hi[0]
-    interior = Bounds((compute.orin_box.lo[0] - clear, -half_in, floor_z), (front_out - wall, half_in, top_in))
+    rear_in = compute.orin_box.lo[0] - rear_plug_room_mm(fits)   # room for the right-angle plugs in its ports
+    interior = Bounds((rear_in, -half_in, floor_z), (front_out - wall, half_in, top_in))
     grown = interior.grown(wall)
     return Shell(interior=interior, outer=Bounds(grown.lo, (front_out, grown.hi[1], grown.hi[2])), split_z=split_z)
 
@@ -131,7 +149,7 @@ def port_cutout(fits: Fits, shell: Shell, compute: Compute) -> Bounds:
 
 
 def place_vents(rig: Rig, c: Constants, fits: Fits, shell: Shell, lugs, cameras: Cameras, fans: dict[str, Fan],
-                compute: Compute, converter_box: Bounds) -> tuple[Bounds, ...]:
+                compute: Compute, converter_box: Bounds, controls: tuple[Bounds, ...] = ()) -> tuple[Bounds, ...]:
     """Every vent slot (cad/airflow.py checks each air path's free area against its fan):
 
     - the blowers' intakes: vertical slots in the tray's side walls beside each fan;
@@ -144,7 +162,8 @@ def place_vents(rig: Rig, c: Constants, fits: Fits, shell: Shell, lugs, cameras:
       ``min_area_ratio`` x the fan's outlet.
 
     No slot is wider than ``slot_width_mm`` or longer than ``slot_length_mm``: a longer run is
-    ``segments`` with a two-minimum-wall rib between.
+    ``segments`` with a two-minimum-wall rib between. No slot comes within a wall of a control's box in the
+    lid's side walls (``controls``: the record button's; its hole beside a slot left a 0.14 mm sliver).
 
     Every slot in the lid runs along x, the lid's print direction (it prints on its rear face), so its
     top in the print is a ``slot_width_mm`` bridge; every slot in the tray is vertical for the same reason."""
@@ -155,7 +174,8 @@ def place_vents(rig: Rig, c: Constants, fits: Fits, shell: Shell, lugs, cameras:
         keep_out[s].append((x - c.lug_width_mm / 2 - fits.wall, x + c.lug_width_mm / 2 + fits.wall))
     keep_out[-1.0].append((converter_box.lo[0] - fits.wall, converter_box.hi[0] + fits.wall))
     vents = _side_slots(rig, fits, shell, pitch, keep_out, fans, compute)
-    vents += _lid_side_slots(rig, c, fits, shell, pitch, compute)
+    keep = [b.grown(fits.wall) for b in controls]
+    vents += [v for v in _lid_side_slots(rig, c, fits, shell, pitch, compute) if not any(v.overlaps(k) for k in keep)]
     vents += _roof_slots(rig, fits, shell, pitch, compute)
     for f in fans.values():
         vents += _blower_exhaust(rig, c, fits, shell, pitch, lugs, converter_box, cameras, f)

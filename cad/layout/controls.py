@@ -25,7 +25,8 @@ BUTTON_PAD_GAP_MM = 3.0
 def place_controls(rig: Rig, fits: Fits, shell: Shell, compute: Compute,
                    handles: Handles | None = None) -> dict[str, tuple[PanelPart, Pose]]:
     """Node name -> (panel part, pose): the switch on the right of the rear wall, at the lid's mid height;
-    the record button in the lid's left wall under the left side grip, just behind its front foot pad,
+    the record button in the lid's left wall under the left side grip, just behind its front foot pad
+    (raised over the devkit's top when its body would reach in beside the devkit),
     where the hand holding that grip reaches it (the "ergonomics" check; on the rear wall it was 60 mm
     from the nearest grip); an antenna on each side of the roof, ahead of the rear wall's controls."""
     o, w = shell.outer, fits.wall
@@ -38,7 +39,12 @@ def place_controls(rig: Rig, fits: Fits, shell: Shell, compute: Compute,
     if handles is not None and "left" in handles.poses:
         front_pad = max((p for p in handles.pads if p.lo[1] >= o.hi[1] - w), key=lambda p: p.hi[0])
         x = front_pad.lo[0] - bt.size[1] / 2 - BUTTON_PAD_GAP_MM
-        out["record_button"] = (bt, Pose.from_xyz_rpy_deg((x, o.hi[1], handles.poses["left"].t[2]), (0, 0, 90.0)))
+        z = handles.poses["left"].t[2]
+        # its body reaches in past the devkit's side: where it stands beside the devkit it passes over its top
+        b, inner = compute.orin_box, o.hi[1] - w - bt.size[0]
+        if inner < b.hi[1] + fits.clear and x - bt.size[1] / 2 < b.hi[0] + fits.clear:
+            z = max(z, b.hi[2] + fits.clear + bt.size[2] / 2)
+        out["record_button"] = (bt, Pose.from_xyz_rpy_deg((x, o.hi[1], z), (0, 0, 90.0)))
     ant = PanelPart.antenna(rig, part_of_kind(rig, "antenna"), w)
     ax = o.lo[0] + max(sw.size[0], bt.size[0]) + w + fits.clear + ant.size[1] / 2 + ANTENNA_GAP_MM
     for side, s in SIDES:

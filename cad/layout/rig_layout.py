@@ -9,6 +9,7 @@ from platform_tools.rig import Rig
 from platform_tools.rig.frames import Pose
 
 from cad.bought.panel import PanelPart
+from cad.geom import placed_bounds
 
 from .cameras import Cameras, place_cameras
 from .case import Case, place_lugs, place_shell, place_vents, port_cutout
@@ -57,13 +58,15 @@ def build_layout(rig: Rig, c: Constants) -> Layout:
     shell = place_shell(rig, fits, cameras, fans, compute, mounts.floor_z)
     power = place_power(rig, fits, shell, compute, cameras)
     lugs = place_lugs(rig, c, shell)
+    handles = place_handles(rig, c, fits, shell)
+    controls = place_controls(rig, fits, shell, compute, handles)
+    in_side_walls = tuple(placed_bounds(p.bounds(), pose) for name, (p, pose) in controls.items() if name == "record_button")
     case = Case(interior=shell.interior, outer=shell.outer, split_z=shell.split_z, lugs=lugs,
                 port_cutout=port_cutout(fits, shell, compute),
-                vents=place_vents(rig, c, fits, shell, lugs, cameras, fans, compute, power.converter_box))
+                vents=place_vents(rig, c, fits, shell, lugs, cameras, fans, compute, power.converter_box, in_side_walls))
     cooling = Cooling(part=fan_part, fans=fans, plates=plates)
-    handles = place_handles(rig, c, fits, shell)
     joints = place_joints(rig, c, fits, cameras=cameras, cooling=cooling, mounts=mounts, compute=compute,
                           power=power, case=case, handles=handles)
     return Layout(rig=rig, c=c, fits=fits, cameras=cameras, cooling=cooling, mounts=mounts, compute=compute,
-                  case=case, power=power, handles=handles, controls=place_controls(rig, fits, shell, compute, handles),
+                  case=case, power=power, handles=handles, controls=controls,
                   joints=joints)

@@ -88,11 +88,11 @@ def test_an_impossible_design_is_bad_input_in_every_command(tmp_path):
     report = tmp_path / "report.txt"
     out = tmp_path / "out"
     for args in (("check", "--report", str(report)), ("params",), ("export", "SVG", "--out", str(out))):
-        r = run(*args, "--set", "enclosure.handles.grip_length_mm=150")
+        r = run(*args, "--set", "enclosure.handles.grip_length_mm=160")
         assert r.returncode == 2, (args, r.stderr)
         lines = r.stderr.strip().splitlines()
         assert len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
-        assert "enclosure.handles.grip_length_mm: got 150 mm" in lines[0] and "expected 64.0 to 137.4 mm" in lines[0]
+        assert "enclosure.handles.grip_length_mm: got 160 mm" in lines[0] and "expected 64.0 to 150.4 mm" in lines[0]
     assert not report.exists() and not out.exists()
 
 
@@ -103,10 +103,10 @@ def test_suggested_grip_limits_really_pass_and_fail():
     from cad.layout import design_problems
     def problems(length):
         return design_problems(load_rig(overrides=[f"enclosure.handles.grip_length_mm={length}"]))
-    assert problems(64.0) == [] and problems(137.4) == []
-    for bad in (63.9, 137.5, 300):
+    assert problems(64.0) == [] and problems(150.4) == []
+    for bad in (63.9, 150.5, 300):
         [p] = problems(bad)
-        assert p.key == "enclosure.handles.grip_length_mm" and "expected 64.0 to 137.4 mm" in p.message
+        assert p.key == "enclosure.handles.grip_length_mm" and "expected 64.0 to 150.4 mm" in p.message
 
 
 @pytest.mark.slow

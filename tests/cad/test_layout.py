@@ -95,3 +95,31 @@ def test_impossible_values_name_the_constraint(override, key):
 def test_default_design_has_no_problems(rig):
     assert design_problems(rig) == []
     assert len(layout(rig).joints) > 20
+
+
+def test_the_layout_lists_the_boson_clamp_screws_as_the_assembly_places_them(rig, asm):
+    """``layout()`` is what ``params`` prints: its joints are the assembly's, the retaining plates' M1.6 screws
+    among them (one core screw and two anchors per Boson)."""
+    lay = layout(rig)
+    clamp = sorted(j.name for j in lay.joints if j.name.startswith("boson_clamp_"))
+    assert clamp == sorted(f"boson_clamp_{s}_{k}" for s in ("left", "right") for k in ("core", "anchor_0", "anchor_1"))
+    assert all(j.thread == "M1.6" for j in lay.joints if j.name in clamp)
+    assert [j.name for j in lay.joints] == [j.name for j in asm.layout.joints]
+
+
+def test_the_rear_wall_stands_the_deepest_rear_plug_behind_the_devkit(rig, monkeypatch):
+    """The room between the devkit's port face and the rear wall's inner face is the deepest right-angle plug of
+    the cable table plus the clearance; a deeper plug moves the wall back with it, nothing inside."""
+    import dataclasses
+    from cad.bought.cables import cable_table
+    from cad.layout import build_layout, C
+    lay = layout(rig)
+    plugs = cable_table().plugs
+    room = lay.compute.orin_box.lo[0] - lay.case.interior.lo[0]
+    assert room == pytest.approx(max(p.depth_mm for p in plugs.values()) + lay.fits.clear)
+    deeper = dataclasses.replace(cable_table(), plugs={**plugs, "deep": dataclasses.replace(
+        next(iter(plugs.values())), depth_mm=20.0)})
+    monkeypatch.setattr("cad.layout.case.cable_table", lambda: deeper)
+    moved = build_layout(rig, C)
+    assert moved.compute.orin_box.lo[0] - moved.case.interior.lo[0] == pytest.approx(20.0 + lay.fits.clear)
+    assert moved.compute.orin_box == lay.compute.orin_box and moved.power.converter_box == lay.power.converter_box
