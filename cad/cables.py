@@ -10,6 +10,9 @@ diameter (``cad/bought/cables.yaml``), and checked:
   into too: a cable ends on its connector's face, it does not enter the part); anything above the
   interference check's 0.01 mm^3 is a clash, so a cable through a wall fails unless its path goes
   through an opening;
+- **plugs**: the right-angle plugs' bodies in the Orin's rear ports (``plugs`` of the cable table) clear
+  of every part and every other cable;
+- **cable to cable**: no two swept cables overlap;
 - **length**: path length (straights plus arcs ``R theta``) plus the kind's service slack, rounded up
   to the kind's next stock length (or to 10 mm for a kind cut from a reel); what the BOM buys.
 
@@ -24,8 +27,8 @@ from dataclasses import dataclass
 import cadquery as cq
 import numpy as np
 
-from cad.bought.cables import CableKind, cable_table
-from cad.geom import Vec3, bounds_of, placed_bounds
+from cad.bought.cables import CableKind, PlugEnvelope, cable_table
+from cad.geom import Bounds, Vec3, bounds_of, placed_bounds
 
 from .assembly import Assembly
 
@@ -44,11 +47,28 @@ ORIN_HEADER_Y_MM, ORIN_HEADER_Z_MM = 45.0, 42.0
 ORIN_WIFI_Z_MM = 60.0
 #: a fan's lead leaves its top face at its centre; it first rises this far above the fan's top
 FAN_LEAD_RISE_MM = 12.0
-#: the sync branches run along under the ZED's shelf at the breakout's height, from this far behind the ZED
-SYNC_RUN_BEHIND_ZED_MM = 18.0
 #: the Makita dock adapter's lead leaves its side face towards the gland at its mid-height (estimate: the
 #: adapter's lead exit is not in any public text; measure the adapter you buy and move it here)
 ADAPTER_LEAD_EXIT_Z_SHARE = 0.5
+#: each sync branch drops from the card's height this far inboard of its breakout's header (the USB lead's
+#: lane), ahead of the Orin's front face, and crosses to the header under the USB lead
+SYNC_DROP_INBOARD_MM = 10.0
+#: the Orin devkit's rear ports the leads plug into, on its rear face (-x): across
+#: (y, from its centre, + left), up from the devkit's bottom (z), the right-angle plug of the cable table
+#: each takes and the side (+1 left, -1 right) its cable leaves the plug towards. Estimates: no port drawing
+#: of the devkit is in the reference (measure a devkit); the USB-A ports the two Bosons use sit in the port
+#: band's upper half, the DC jack low in it, so the DC lead runs under the right USB plug.
+ORIN_REAR_PORTS = {
+    "usb_left": (25.0, 23.0, "usb_a_right_angle", 1.0),
+    "usb_right": (-25.0, 23.0, "usb_a_right_angle", -1.0),
+    "dc_jack": (-5.0, 9.0, "dc_barrel_right_angle", -1.0),
+}
+#: the DC-DC converter's output leads leave its rear face (-x) at its centre, where the DC lead is spliced
+#: to them. Estimate: the converter is a box in the rig (parts.dc_converter)
+CONVERTER_OUT_SHARE = (0.5, 0.5)
+#: the USB leads climb from the breakout to their run at this slope (deg), steep enough for the right one to
+#: clear the converter's top before its front face (a shallower one needs more run than the fan plates leave)
+USB_RISE_DEG = 75.0
 
 
 @dataclass(frozen=True)
@@ -61,6 +81,8 @@ class Route:
     points: tuple[Vec3, ...]
     radius_mm: float           # the radius every bend is laid with
     plugs: tuple[bool, bool] = (True, True)   # a connector at each end (False: the part's own lead leaves it)
+    #: the bodies of right-angle plugs at its ends (name, box): checked clear of every part and cable
+    envelopes: tuple[tuple[str, Bounds], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -170,17 +192,21 @@ def routes(asm: Assembly) -> list[Route]:
     p1, p2 = _s_bend(a, b, k.plug_mm, R("gmsl2_coax"))
     out.append(Route("gmsl2", "gmsl2_coax", "gmsl2_cable", ("zed_x", "zed_link_quad"), (tuple(a), p1, p2, tuple(b)),
                      R("gmsl2_coax")))
-    # sync harness: from the card's trigger connector forwards, down beside the Orin and along to each
-    # breakout's header, plugged in from behind
+    # sync harness: from the card's trigger connector forwards over the devkit, across to the branch's drop
+    # lane ahead of the Orin's front, down it under the USB lead's height, and across to each breakout's header,
+    # plugged in from behind (cad/cables.py has no route over another: the cable-to-cable check)
     ks = table["sync_pair"]
+    Rs = R("sync_pair")
     start = np.array([card.hi[0], CARD_SYNC_Y_MM, card.centre[2]])
+    x_drop = orin.hi[0] + lay.fits.clear + ks.diameter_mm / 2 + Rs
     for side, pose in lay.power.breakout_poses.items():
         hdr = pose.apply(np.array(lay.power.breakout.sync_header()))
-        run_x = zed.lo[0] - SYNC_RUN_BEHIND_ZED_MM
-        pts = (tuple(start), (start[0] + ks.plug_mm + 2 * R("sync_pair"), start[1], start[2]),
+        run_x = hdr[0] - ks.plug_mm - Rs    # a bend's tangent is at most R (turns up to 90 deg)
+        y_drop = float(hdr[1]) - np.sign(hdr[1]) * SYNC_DROP_INBOARD_MM
+        pts = (tuple(start), (x_drop, start[1], start[2]), (x_drop, y_drop, start[2]), (x_drop, y_drop, float(hdr[2])),
                (run_x, float(hdr[1]), float(hdr[2])), tuple(hdr))
         out.append(Route(f"sync_{side}", "sync_pair", "sync_harness", ("zed_link_quad", f"sync_breakout_{side}"), pts,
-                         R("sync_pair")))
+                         Rs))
     # fan leads: up from the fan's top, across to the Orin's front face, into the 40-pin header
     kf = table["fan_lead"]   # the fan's own lead leaves its body: a plug only at the header
     for side, f in lay.cooling.fans.items():
@@ -203,7 +229,95 @@ def routes(asm: Assembly) -> list[Route]:
         out.append(Route(f"pigtail_{name.rsplit('_', 1)[1]}", "ufl_pigtail", "wifi_pigtail", (name, "jetson_agx_orin"),
                          pts, R("ufl_pigtail")))
     out.append(battery_lead(asm))
+    out += usb_leads(asm)
+    out.append(dc_lead(asm))
     return out
+
+
+def plug_at_port(orin_box: Bounds, port: str) -> tuple[PlugEnvelope, Bounds, tuple[float, float, float], float]:
+    """The right-angle plug in one of the Orin's rear ports (``ORIN_REAR_PORTS``): its envelope, its body's
+    box behind the port face, where its cable leaves that body, and the side (+-1 in y) it leaves towards."""
+    y, z_up, plug_id, side = ORIN_REAR_PORTS[port]
+    plug = cable_table().plugs[plug_id]
+    x, z = orin_box.lo[0], orin_box.lo[2] + z_up
+    ya, yb = sorted((y - side * plug.width_mm / 2, y + side * plug.reach_mm))
+    body = Bounds((x - plug.depth_mm, ya, z - plug.height_mm / 2), (x, yb, z + plug.height_mm / 2))
+    return plug, body, (x - plug.exit_depth_mm, y + side * plug.reach_mm, z), side
+
+
+def _slope(dz: float, R: float, slope_deg: float) -> float:
+    """The slope (rad) of a climb or drop of ``dz`` between two bends of radius ``R``: ``slope_deg``, or
+    shallower when the climb is too short for both bends at that slope (the segment between the corners
+    must hold both tangents, with 2 % to spare)."""
+    theta = math.radians(slope_deg)
+    while theta > math.radians(STRAIGHT_DEG) and abs(dz) / math.sin(theta) < 2 * R * math.tan(theta / 2) * 1.02:
+        theta -= math.radians(1.0)
+    return theta
+
+
+def _rise(x0: float, z0: float, z1: float, R: float, slope_deg: float) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The corners (x, z) of a climb from height ``z0`` to ``z1`` going -x whose first bend starts at ``x0``."""
+    dz = abs(z1 - z0)
+    theta = _slope(dz, R, slope_deg)
+    xa = x0 - R * math.tan(theta / 2)
+    return (xa, z0), (xa - dz / math.tan(theta), z1)
+
+
+def usb_leads(asm: Assembly) -> list[Route]:
+    """Each Boson's USB lead, from its breakout's USB-C socket to its USB-A port on the Orin's rear panel.
+    Out of the socket straight back (the plug), a climb to the lead's run (the port's height, or over any
+    power part in its lane: the converter on the right), back beside the devkit in the breakout's lane,
+    down to the port's height ahead of the rear wall, and one bend across the rear bay into the right-angle
+    plug's side. The rear wall stands the deepest plug behind the port face (cad/layout/case.py)."""
+    lay = asm.layout
+    k = cable_table().kinds["usb_lead"]
+    R, r = k.min_bend_radius_mm, k.diameter_mm / 2
+    orin, clear = lay.compute.orin_box, lay.fits.clear
+    obstacles = [lay.power.converter_box, placed_bounds(lay.power.cutoff.bounds(), lay.power.cutoff_pose),
+                 placed_bounds(lay.power.fuse.bounds(), lay.power.fuse_pose)]
+    out = []
+    for side, pose in lay.power.breakout_poses.items():
+        s0 = np.asarray(pose.apply(np.array(lay.power.breakout.usb_socket())), dtype=float)
+        port = f"usb_{side}"
+        plug, body, exit_pt, _ = plug_at_port(orin, port)
+        y, z0, zp = float(s0[1]), float(s0[2]), exit_pt[2]
+        lane = [b for b in obstacles if b.lo[1] - r - clear < y < b.hi[1] + r + clear]
+        z_run = max([zp] + [b.hi[2] + r + clear for b in lane])
+        (x1, _), (x2, _) = _rise(s0[0] - k.plug_mm, z0, z_run, R, USB_RISE_DEG)
+        xc = exit_pt[0]
+        # the lane at the rear: the bay's bend (from -x into -+y) arcs forward past the devkit's rear corner
+        ahead = xc + R - orin.lo[0]
+        y_rear = orin.hi[1] + r + clear + (R - math.sqrt(R * R - ahead * ahead) if 0 < ahead < R else 0.0)
+        y_rear = max(abs(y), y_rear) * math.copysign(1.0, y)
+        pts = [tuple(s0), (x1, y, z0), (x2, y, z_run)]
+        if z_run - zp > 1e-6:   # down to the port's height ahead of the bay's last bend
+            down = _slope(z_run - zp, R, USB_RISE_DEG)
+            x4 = xc + R + R * math.tan(down / 2) + clear
+            x3 = x4 + (z_run - zp) / math.tan(down)
+            pts += [(x3, y_rear, z_run), (x4, y_rear, zp)]
+        pts += [(xc, y_rear, zp), tuple(exit_pt)]
+        out.append(Route(port, "usb_lead", "boson_usb_cable", (f"sync_breakout_{side}", "jetson_agx_orin"), tuple(pts),
+                         R, plugs=(True, False), envelopes=((f"{port} plug ({plug.description})", body),)))
+    return out
+
+
+def dc_lead(asm: Assembly) -> Route:
+    """The Orin's DC lead: from the right-angle barrel plug in its DC jack across the rear bay (low in the
+    port band, under the right USB plug), one bend forward into the converter's lane, and a climb to the
+    converter's output at its rear face, where the pigtail is spliced to the converter's own leads."""
+    lay = asm.layout
+    k = cable_table().kinds["dc_lead"]
+    R = k.min_bend_radius_mm
+    plug, body, exit_pt, _ = plug_at_port(lay.compute.orin_box, "dc_jack")
+    conv = lay.power.converter_box
+    out_pt = (conv.lo[0], conv.lo[1] + CONVERTER_OUT_SHARE[0] * (conv.hi[1] - conv.lo[1]),
+              conv.lo[2] + CONVERTER_OUT_SHARE[1] * (conv.hi[2] - conv.lo[2]))
+    xc, zp = exit_pt[0], exit_pt[2]
+    corner = (xc, out_pt[1], zp)
+    level = (out_pt[0] - R, out_pt[1], out_pt[2])       # level with the output a radius behind it
+    pts = (tuple(exit_pt), corner, level, out_pt)
+    return Route("dc_lead", "dc_lead", "orin_dc_plug", ("jetson_agx_orin", "dc_converter"), pts, R,
+                 plugs=(False, False), envelopes=((f"dc_jack plug ({plug.description})", body),))
 
 
 def battery_lead(asm: Assembly) -> Route:
@@ -260,24 +374,33 @@ def cable_report(asm: Assembly, extra_routes: list[Route] = (), only: list[Route
         problems.append(f"cad/bought/cables.yaml: kinds.battery_lead.diameter_mm is {table['battery_lead'].diameter_mm:g} mm "
                         f"but parts.{gland.part_id}.dims.cable_diameter_mm (the lead the gland is chosen for) is "
                         f"{gland.cable_d_mm:g} mm: one of them is wrong")
+    usb, room = table.get("usb_lead"), asm.layout.rig.dim(asm.layout.cameras.core.part_id, "usb_connector_clearance_mm")
+    if usb is not None and usb.plug_mm > room + 1e-9:
+        problems.append(f"cad/bought/cables.yaml: kinds.usb_lead.plug_mm is {usb.plug_mm:g} mm but the room behind each "
+                        f"breakout is parts.{asm.layout.cameras.core.part_id}.dims.usb_connector_clearance_mm = {room:g} mm")
+    # (what, its harness, solid): a plug body and its own cable touch by design (the cable leaves its face), and
+    # the branches of one harness (one catalogue entry, one start: the sync Y) share their trunk
+    swept: list[tuple[str, str, cq.Shape]] = []
     for r in rs:
         if r.kind not in table:
             raise KeyError(f"cable {r.name}: kind {r.kind!r} is not in cad/bought/cables.yaml")
         pth = path_of(r, table[r.kind])
         paths.append(pth)
         problems += list(pth.problems)
-        solid = sweep(r, table[r.kind])
-        sb = bounds_of(solid)
-        hits = []
-        for name, s in shapes:
-            if not sb.overlaps(boxes[name], 1e-6):
-                continue
-            c = solid.intersect(s)
-            v = c.Volume() if c.Solids() else 0.0
-            if v > CONTACT_MM3:
-                hits.append(f"{name} ({v:.1f} mm^3)")
+        try:
+            solid = sweep(r, table[r.kind])
+        except Exception as e:   # OpenCascade cannot sweep a self-overlapping centre line: its bends' problems say why
+            problems.append(f"cable {r.name}: its path cannot be swept ({type(e).__name__}); see its bends above")
+            continue
+        hits = _hits(solid, shapes, boxes)
         if hits:
             problems.append(f"cable {r.name} ({r.ends[0]} to {r.ends[1]}) runs through {', '.join(hits)}")
+        for what, b in r.envelopes:
+            ph = _hits(b.solid(), shapes, boxes)
+            if ph:
+                problems.append(f"cable {r.name}: its {what} runs into {', '.join(ph)}")
+            swept.append((f"the {what}", _harness(r), b.solid()))
+        swept.append((f"cable {r.name}", _harness(r), solid))
         bought = pth.bought_mm
         details.append(f"{r.name}: {table[r.kind].description}, {r.ends[0]} -> {r.ends[1]}: {pth.length_mm:.0f} mm + "
                        f"{table[r.kind].service_slack_mm:g} mm slack -> "
@@ -287,7 +410,41 @@ def cable_report(asm: Assembly, extra_routes: list[Route] = (), only: list[Route
         if bought is None:
             problems.append(f"cable {r.name}: {pth.length_mm:.0f} mm + slack is longer than every stock length of "
                             f"{r.kind} ({', '.join(f'{s:g}' for s in table[r.kind].stock_lengths_mm)} mm)")
+    problems += _cable_clashes(swept)
     return CableReport(paths, problems, details)
+
+
+def _hits(solid: cq.Shape, shapes: list[tuple[str, cq.Shape]], boxes: dict[str, Bounds]) -> list[str]:
+    """Every part ``solid`` overlaps by more than a touch, with the volume."""
+    sb, hits = bounds_of(solid), []
+    for name, s in shapes:
+        if not sb.overlaps(boxes[name], 1e-6):
+            continue
+        c = solid.intersect(s)
+        v = c.Volume() if c.Solids() else 0.0
+        if v > CONTACT_MM3:
+            hits.append(f"{name} ({v:.1f} mm^3)")
+    return hits
+
+
+def _harness(r: Route) -> str:
+    """What a route is part of: its catalogue entry and start point (the branches of a Y harness), or itself."""
+    return f"{r.catalogue}@{np.round(r.points[0], 3).tolist()}" if r.catalogue else r.name
+
+
+def _cable_clashes(swept: list[tuple[str, str, cq.Shape]]) -> list[str]:
+    """Every two cables (or a cable and a plug body) of different harnesses that overlap by more than a touch."""
+    out, bbs = [], [bounds_of(s) for _, _, s in swept]
+    for i in range(len(swept)):
+        for j in range(i + 1, len(swept)):
+            (a, ra, sa), (b, rb, sb) = swept[i], swept[j]
+            if ra == rb or not bbs[i].overlaps(bbs[j], 1e-6):
+                continue
+            c = sa.intersect(sb)
+            v = c.Volume() if c.Solids() else 0.0
+            if v > CONTACT_MM3:
+                out.append(f"{a} and {b} overlap ({v:.1f} mm^3): one of them must move")
+    return out
 
 
 def cable_lengths(asm: Assembly) -> list[dict]:

@@ -93,5 +93,6 @@ class SyncBreakout(BoughtPart):
         return (-self.size[0], 0.0, 0.0)
 
     def sync_header(self) -> tuple[float, float, float]:
-        """Where the sync harness plugs in: on the rear face, above the USB-C socket."""
-        return (-self.size[0], 0.0, self.size[2] / 4)
+        """Where the sync harness plugs in: on the rear face, below the USB-C socket (the USB lead climbs
+        away from the socket towards its run over the converter; the sync branch comes in under it)."""
+        return (-self.size[0], 0.0, -self.size[2] / 4)

@@ -10,6 +10,7 @@ import pytest
 
 from cad.bought.cables import cable_table
 from cad.cables import Route, centreline, path_of, routes, sweep
+from cad.geom import bounds_of
 
 KINDS = cable_table().kinds
 
@@ -68,7 +69,7 @@ def test_rig_cables_pass_and_bends_read_back_from_the_wires(asm, results):
     assert r.ok, r.details[:12]
     rs = routes(asm)
     assert {x.name for x in rs} >= {"gmsl2", "sync_left", "sync_right", "fan_lead_left", "fan_lead_right",
-                                    "pigtail_left", "pigtail_right"}
+                                    "pigtail_left", "pigtail_right", "battery_lead", "usb_left", "usb_right", "dc_lead"}
     for x in rs:
         arcs = [e for e in centreline(x).Edges() if e.geomType() == "CIRCLE"]
         assert arcs, x.name
@@ -117,3 +118,100 @@ def test_the_battery_lead_rises_straight_through_the_gland_and_a_tighter_loop_fa
     short[2:4, 2] += k.min_bend_radius_mm          # the drop beside the adapter one radius instead of two
     squeezed = path_of(dataclasses.replace(lead, points=tuple(map(tuple, short))), k)
     assert any("segment 2" in s and "too short" in s for s in squeezed.problems), squeezed.problems
+
+
+# ----------------------------------------------------------------------------- the Orin's rear-port leads
+def _rear_leads(asm):
+    from cad.cables import dc_lead, usb_leads
+    return usb_leads(asm) + [dc_lead(asm)]
+
+
+def _moved(route, dx):
+    """The route and its plug bodies moved ``dx`` along x (the rear wall, in effect, moved by -dx)."""
+    from cad.geom import Bounds
+    pts = tuple((p[0] + dx, p[1], p[2]) for p in route.points)
+    env = tuple((w, Bounds((b.lo[0] + dx, b.lo[1], b.lo[2]), (b.hi[0] + dx, b.hi[1], b.hi[2]))) for w, b in route.envelopes)
+    return dataclasses.replace(route, points=pts, envelopes=env)
+
+
+@pytest.mark.slow
+def test_the_rear_port_leads_pass_and_their_plugs_stand_clear_of_the_rear_wall(asm):
+    """Each Boson's USB lead and the DC lead swept clear of every part and cable, their right-angle plugs' bodies
+    in the room between the devkit's port face and the rear wall: the distance OpenCascade measures from each
+    plug body to the built tray is at least the component clearance, and the plug's face touches the devkit."""
+    from cad.cables import cable_report
+    leads = _rear_leads(asm)
+    assert {r.name for r in leads} == {"usb_left", "usb_right", "dc_lead"}
+    rep = cable_report(asm, only=leads)
+    assert not rep.problems, rep.problems
+    shapes = {n.name: n.shape(asm.cache) for n in asm.nodes}
+    for r in leads:
+        assert r.envelopes, r.name
+        for what, b in r.envelopes:
+            assert b.solid().distance(shapes["case_lower"]) >= asm.layout.fits.clear - 1e-6, what
+            assert b.solid().distance(shapes["jetson_agx_orin"]) < 1e-6, what
+        assert r.ends[1 if r.name.startswith("usb") else 0] == "jetson_agx_orin"
+    # the USB leads bend at the lead's minimum radius on the wire OpenCascade holds
+    for r in leads[:2]:
+        arcs = [e for e in centreline(r).Edges() if e.geomType() == "CIRCLE"]
+        assert arcs and all(e.radius() == pytest.approx(KINDS["usb_lead"].min_bend_radius_mm) for e in arcs)
+
+
+@pytest.mark.slow
+def test_a_rear_lead_bent_too_tight_fails(asm):
+    k = KINDS["usb_lead"]
+    lead = _rear_leads(asm)[0]
+    tight = path_of(dataclasses.replace(lead, radius_mm=k.min_bend_radius_mm / 2), k)
+    assert any(f"needs at least {k.min_bend_radius_mm:g} mm" in p for p in tight.problems), tight.problems
+    # the bay's last bend squeezed: the plug's exit moved up to 5 mm from the lane's corner
+    p = list(lead.points)
+    p[-1] = (p[-1][0], p[-2][1] - math.copysign(5.0, p[-2][1]), p[-1][2])
+    squeezed = path_of(dataclasses.replace(lead, points=tuple(p)), k)
+    assert any("too short" in s for s in squeezed.problems), squeezed.problems
+
+
+@pytest.mark.slow
+def test_with_the_rear_wall_where_it_was_the_plugs_and_leads_run_into_it(asm):
+    """The rear wall used to stand one clearance behind the port face: every lead moved back by the room the
+    wall was moved back for (as if the wall stood where it was) runs into case_lower beside the port window,
+    and every plug sticks out through the window, behind the case's outer rear face (the built tray's)."""
+    from cad.cables import cable_report
+    lay = asm.layout
+    back = lay.compute.orin_box.lo[0] - lay.case.interior.lo[0] - lay.fits.clear
+    assert back > 10.0
+    moved = [_moved(r, -back) for r in _rear_leads(asm)]
+    rep = cable_report(asm, only=moved)
+    for name in ("usb_left", "usb_right", "dc_lead"):
+        assert any(p.startswith(f"cable {name} (") and "case_lower" in p for p in rep.problems), (name, rep.problems)
+    rear = bounds_of(next(n for n in asm.nodes if n.name == "case_lower").shape(asm.cache)).lo[0]
+    assert all(b.lo[0] < rear for r in moved for _, b in r.envelopes)
+    assert all(b.lo[0] > rear for r in _rear_leads(asm) for _, b in r.envelopes)
+
+
+@pytest.mark.slow
+def test_two_cables_over_each_other_fail_and_a_y_harness_shares_its_trunk(asm):
+    from cad.cables import cable_report
+    dc = _rear_leads(asm)[2]
+    twin = dataclasses.replace(dc, name="test_twin", catalogue=None, envelopes=(),
+                               points=tuple((p[0], p[1], p[2] + 2.0) for p in dc.points))
+    rep = cable_report(asm, only=[dc, twin])
+    assert any("cable dc_lead and cable test_twin overlap" in p for p in rep.problems), rep.problems
+    syncs = [r for r in routes(asm) if r.name.startswith("sync_")]
+    assert len(syncs) == 2 and syncs[0].points[:2] == syncs[1].points[:2]     # one trunk, two branches
+    assert not [p for p in cable_report(asm, only=syncs).problems if "overlap" in p]
+
+
+@pytest.mark.slow
+def test_a_usb_plug_longer_than_the_room_behind_the_breakout_is_one_line(asm, monkeypatch):
+    """The USB lead's straight plug must fit the room the Boson's breakout leaves behind it (the rig's
+    ``usb_connector_clearance_mm``, which the power-parts check keeps clear): a longer one is named."""
+    from cad import cables
+    room = asm.rig.dim(asm.layout.cameras.core.part_id, "usb_connector_clearance_mm")
+    table = cable_table()
+    assert KINDS["usb_lead"].plug_mm <= room
+    long = dataclasses.replace(table, kinds={**table.kinds, "usb_lead": dataclasses.replace(
+        table.kinds["usb_lead"], plug_mm=room + 3)})
+    monkeypatch.setattr(cables, "cable_table", lambda: long)
+    rep = cables.cable_report(asm, only=[])
+    assert rep.problems == [f"cad/bought/cables.yaml: kinds.usb_lead.plug_mm is {room + 3:g} mm but the room behind each "
+                            f"breakout is parts.boson_640.dims.usb_connector_clearance_mm = {room:g} mm"]
