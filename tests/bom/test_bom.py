@@ -82,7 +82,7 @@ def _catalogue(tmp_path, edit) -> str:
 
 
 def _dup_number(d):
-    d["parts"]["usb_spare"] = dict(d["parts"]["boson_usb_cable"])
+    d["parts"]["sync_spare"] = dict(d["parts"]["sync_harness"])
 
 
 def _unused(d):
@@ -99,8 +99,8 @@ def _written_filament(d):
     (lambda d: d["parts"]["zed_x"]["price"].update(currency="US$"), "parts.zed_x.price.currency: got 'US$'"),
     (lambda d: d["parts"]["zed_x"]["price"].update(currency="GBP") or d["exchange_rates"].pop("GBP"),
      "parts.zed_x.price.currency: is GBP, which has no rate"),
-    (_dup_number, "parts.usb_spare: has part number 'USB-C to USB-A cable, 0.3 m, right angle', already used by "
-                  "parts.boson_usb_cable"),
+    (_dup_number, "parts.sync_spare: has part number 'JST-GH 1.25 mm pigtails and 26 AWG wire (Y harness)', already "
+                  "used by parts.sync_harness"),
     (lambda d: d["parts"].pop("quarter20_screw"), "parts.quarter20_screw: missing: the CAD assembly places "
                                                   "quarter20_screw (screw_zed_x_0)"),
     (lambda d: d["parts"].pop("heat_sink"), "parts.heat_sink: missing"),
@@ -168,6 +168,15 @@ def test_cables_bought_at_the_length_their_route_needs(bom_default):
     assert g["source"] == "cable routes" and float(g["quantity"]) == 1 and f"{bought:g} mm" in g["part_number"]
     p = rows["wifi_pigtail"]
     assert p["source"] == "cable routes" and f"{routes['pigtail-left'][1]:g} mm" in p["part_number"]
+    # the Bosons' USB cables: one per route, at the stock length the longer of the two needs (recomputed here
+    # from the routes' lengths in bom.html and the cable table's stock lengths)
+    ku = cable_table().kinds["usb_lead"]
+    need = max(routes["usb-left"][0], routes["usb-right"][0]) + ku.service_slack_mm
+    u = rows["boson_usb_cable"]
+    assert float(u["quantity"]) == 2 and f"{min(s for s in ku.stock_lengths_mm if s >= need):g} mm" in u["part_number"]
+    kd = cable_table().kinds["dc_lead"]
+    d = rows["orin_dc_plug"]
+    assert float(d["quantity"]) == 1 and f"{min(s for s in kd.stock_lengths_mm if s >= routes['dc-lead'][0] + kd.service_slack_mm):g} mm" in d["part_number"]
 
 
 def test_cable_routes_supply_with_a_quantity_is_refused(tmp_path, capsys):

@@ -207,7 +207,7 @@ def test_cable_pictures_of_the_wiring_steps(docs_default, browser):
     browser.get((docs_default / "assembly.html").as_uri())
     figs = {f["step"]: f for f in browser.execute_script(CABLE_PICTURES)}
     assert {"step-cables", "step-controls"} <= set(figs)
-    assert {r for r, _ in figs["step-cables"]["cables"]} >= {"gmsl2", "sync_left", "sync_right"}
+    assert {r for r, _ in figs["step-cables"]["cables"]} >= {"gmsl2", "sync_left", "sync_right", "usb_left", "usb_right", "dc_lead"}
     assert {r for r, _ in figs["step-controls"]["cables"]} == {"pigtail_left", "pigtail_right"}
     html = (docs_default / "bom.html").read_text()
     bought = {m[0]: float(m[1]) for m in re.findall(r'id="cable-([a-z0-9-]+)" data-route-mm="[0-9.]+" data-bought-mm="([0-9.]+)"', html)}
