@@ -303,9 +303,6 @@ def airflow_report(asm, paths: list[AirPath] | None = None) -> AirflowReport:
     gap_stl = float(hits.min() - ob.hi[2]) if np.isfinite(hits).any() else height
     r = AirflowReport(readings, gap_brep, gap_stl, gap_need, gap_by)
     ratio = rig.desc.enclosure.vents.min_area_ratio
-    if not 0 <= cp.fan_hub < cp.fan_diameter:
-        r.problems.append(f"parts.{cp.orin.part_id}.dims.fan_hub_diameter_mm: {cp.fan_hub:g} mm, expected 0 to under "
-                          f"fan_diameter_mm ({cp.fan_diameter:g} mm): the fan would have no free ring")
     for g in readings:
         p = g.path
         r.details.append(f"{p.name}: {g.brep_mm2:.0f} mm^2 free (B-rep) / {g.stl_mm2:.0f} mm^2 (STL, {g.rays} rays) "

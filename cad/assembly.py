@@ -18,7 +18,6 @@ from platform_tools.rig import Rig
 
 from .cache import ShapeCache
 from .layout import Layout, layout
-from .layout.boson_clamp import with_boson_clamps
 from .geom import moved
 from .parts import camera_mounts, case, cooling, handle, power_mounts
 
@@ -86,7 +85,7 @@ class Assembly:
 
 def build(rig: Rig, cache: ShapeCache | None = None) -> Assembly:
     """Lay out and place every part. Raises :class:`cad.layout.DesignError` for impossible values."""
-    lay = with_boson_clamps(layout(rig))
+    lay = layout(rig)
     nodes: list[Node] = []
     I = Pose.identity()
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from platform_tools.rig import Rig
 
+from .boson_clamp import with_boson_clamps
 from .cameras import fov_half_angles_deg
 from .constants import C, Constants
 from .constraints import DesignError, DesignProblem, design_problems
@@ -24,9 +25,10 @@ __all__ = ["C", "Constants", "DesignError", "DesignProblem", "HandleGeometry", "
 
 
 def layout(rig: Rig, c: Constants = C) -> Layout:
-    """Compute the layout; raises :class:`DesignError` naming the rig keys when it cannot be made."""
+    """Compute the layout, the Bosons' retaining-plate screws among its joints (so ``params`` lists them as the
+    assembly places them); raises :class:`DesignError` naming the rig keys when it cannot be made."""
     problems = design_problems(rig, c)
     if problems:
         raise DesignError(problems)
-    return build_layout(rig, c)
+    return with_boson_clamps(build_layout(rig, c))
 

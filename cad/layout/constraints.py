@@ -8,6 +8,8 @@ from dataclasses import dataclass
 
 from platform_tools.rig import Rig
 
+from cad.bought.base import part_of_kind
+
 from .case import lug_bounds
 from .constants import PAD_MARGIN_MM, C, Constants
 from .rig_layout import Layout, build_layout
@@ -61,6 +63,11 @@ def input_problems(rig: Rig):
         yield DesignProblem("enclosure.vents.slot_width_mm", f"{e.vents.slot_width_mm:g} mm is narrower than a wall")
     if e.corner_radius_mm >= e.handles.grip_diameter_mm:
         yield DesignProblem("enclosure.corner_radius_mm", "is larger than the handle grip; expected a few mm")
+    orin = part_of_kind(rig, "computer")
+    fan, hub = rig.dim(orin, "fan_diameter_mm"), rig.dim(orin, "fan_hub_diameter_mm")
+    if not 0 <= hub < fan:   # the devkit's fan would have no free ring: its intake would need nothing (cad/airflow.py)
+        yield DesignProblem(f"parts.{orin}.dims.fan_hub_diameter_mm",
+                            f"{hub:g} mm, expected 0 to under fan_diameter_mm ({fan:g} mm): the fan would have no free ring")
     zed = d.sensors.zed_x.part
     zw = rig.part(zed).envelope_mm.y.value
     zb = rig.dim(zed, "baseline_mm")
