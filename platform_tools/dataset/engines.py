@@ -28,6 +28,10 @@ def run_inline(work, tasks, finished, workers, scheduler, pool=None) -> None:
         next(bar, None)
 
 
+#: how long an aborted pool waits for its executor's manager thread to end (it ends once it sees the workers gone)
+MANAGER_JOIN_S = 10.0
+
+
 class Pool:
     """A process pool of spawned workers that end with this process (workers.die_with_parent), started at once:
     each worker runs ``warm_up`` (imports, numba's kernels loaded) as soon as it exists, so that its start-up
@@ -79,6 +83,12 @@ class Pool:
         mine = [p for p in multiprocessing.active_children() if p not in self._before]
         self._pool.shutdown(wait=False, cancel_futures=True)
         stop(mine)
+        # The executor's manager thread sees its workers gone and closes its wake-up pipe. Left running, it races
+        # concurrent.futures' exit hook, which writes to that pipe unlocked: "Exception ignored ... OSError: [Errno
+        # 9] Bad file descriptor" after the one-line interrupt message (seen once in about ten Ctrl-C tests).
+        manager = getattr(self._pool, "_executor_manager_thread", None)
+        if manager is not None:
+            manager.join(MANAGER_JOIN_S)
 
 
 def _nothing() -> None:
