@@ -388,3 +388,53 @@ def complete(f: np.ndarray, S: np.ndarray, xy: np.ndarray, ij: np.ndarray, board
         keep = ~drop
         P, K, is_new = P[keep], K[keep], is_new[keep]
     return P, K, is_new
+
+
+def corners_past(f: np.ndarray, S: np.ndarray, xy: np.ndarray, ij: np.ndarray, axis: int, line: int,
+                 noise: float) -> tuple[int, int]:
+    """How many lattice points of the line ``line`` along ``axis`` (a line just past the grid:
+    -1, or one past its largest label) look like this grid's corners on the destriped image ``f``,
+    judged as the completion judges a missing corner (the saddle near the prediction, then the
+    checker evidence); returns (passed, judged). A line the anchoring says lies past the board's
+    edge must hold none: a hand over the squares past the last line found looks as plain as the
+    border, and a board larger than --board whose extra corners were all missed ends where the
+    board does not."""
+    pos = {(int(i), int(j)): (float(x), float(y)) for (i, j), (x, y) in zip(ij.tolist(), xy.tolist())}
+    if len(pos) < MIN_CORNERS:
+        return 0, 0
+    blurred = cv2.GaussianBlur(f, (0, 0), SADDLE_BLUR)
+    S_f = _PointSaddle(blurred)
+    ref = _grid_reference(f, S_f, pos)
+    if ref is None:
+        return 0, 0
+    parity, med_amp, med_S = ref
+    if med_amp <= 0 or med_S <= 0:
+        return 0, 0
+    Hh, Ww = f.shape
+    inward = 1 if line < 0 else -1
+    T, PR, US, VS, STEP = [], [], [], [], []
+    for t0 in pos:
+        if t0[axis] != line + inward:
+            continue
+        t = list(t0)
+        t[axis] = line
+        t = tuple(t)
+        r = predict(pos, t)
+        if r is None:
+            continue
+        p, u, v = r
+        k = _scale_inside(p, u, v, Ww, Hh)
+        if k < MIN_SCALE:
+            continue
+        T.append(t), PR.append(p), US.append(u * k), VS.append(v * k)
+        STEP.append(min(math.hypot(*u), math.hypot(*v)))
+    if not T:
+        return 0, 0
+    T, PR, US, VS, step = np.array(T), np.array(PR), np.array(US), np.array(VS), np.array(STEP)
+    tol = np.maximum(FIT_TOL_PX, FIT_TOL * step)
+    sad = _saddle_near(f, blurred, S, PR, tol, step)
+    ok = np.isfinite(sad[:, 0])
+    if not ok.any():
+        return 0, len(T)
+    ev = _evidence(f, S_f, sad[ok], US[ok], VS[ok], T[ok], parity, med_amp, med_S, noise)
+    return int(ev.sum()), len(T)

@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 
 from .candidates import column_pattern, find_candidates
-from .complete import complete
+from .complete import complete, corners_past
 from .grid import anchor, label, link, orient
 from .grow import grow, lattice_outliers
 from .refine import image_noise, levels, refine
@@ -200,4 +200,32 @@ def detect_corners(image: np.ndarray, board: tuple[int, int] = (10, 7)) -> Detec
     ij, why = anchor(lat.g, xy, ij, W, H)
     if ij is None:
         return empty_detection((W, H), why, n_cand)
+    why = goes_on_past_edge(lat, xy, ij, (W, H))
+    if why:
+        return empty_detection((W, H), why, n_cand)
     return finish(lat, xy, ij, (W, H))
+
+
+PAST_EDGE_MAX = 1     # corners the destriped image shows on a line past the board's edge: at most this many
+
+
+def goes_on_past_edge(lat: Lattice, xy: np.ndarray, ij: np.ndarray, board: tuple[int, int]) -> str:
+    """Why the placed grid (``ij`` board coordinates) cannot be where it was placed, or "": on every
+    lattice line just past an edge of the board the grid reaches, the image must show no corner of
+    this grid (complete.corners_past). Where it shows more than PAST_EDGE_MAX, the board goes on
+    there: the anchoring took a line for the board's edge that is not (stereographic hard seed 100,
+    10x7 image 012: a hand over the squares past the third column found; 18 corners labelled four
+    columns off), or the board is larger than --board and its extra corners were all missed."""
+    W, H = board
+    for axis, n_board in ((0, W), (1, H)):
+        name = "i (across)" if axis == 0 else "j (down)"
+        for line, at_edge in ((-1, ij[:, axis].min() == 0), (n_board, ij[:, axis].max() == n_board - 1)):
+            if not at_edge:
+                continue
+            passed, judged = corners_past(lat.f, lat.S, xy, ij, axis, line, lat.noise)
+            if passed > PAST_EDGE_MAX:
+                side = "before the first" if line < 0 else "past the last"
+                return (f"the image shows {passed} of {judged} corners {side} line along {name} where the "
+                        f"{W}x{H} board should end: the board is larger than {W}x{H}, or a hand or the image "
+                        f"edge hides part of it; cannot tell which corners these are")
+    return ""

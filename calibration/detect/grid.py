@@ -14,7 +14,8 @@
    board edge (square centres past the last corner line stop alternating); if neither end of an
    axis is seen, the offset is ambiguous and the view is dropped rather than guessed; so is it
    when both ends look like the board's edge (one is not: a hand over the squares past a line
-   looks as plain as the border).
+   looks as plain as the border). The placement is then checked against the image
+   (detector.goes_on_past_edge): no corner of the grid may show on a line past the board's edge.
 """
 from __future__ import annotations
 
