@@ -57,10 +57,11 @@ def target_board(kind: str, width: int, height: int, square_m: float) -> Board:
     raise ValueError(f"no renderer for target {kind!r}")
 
 
-def render_views(lens, board: Board, difficulty: str = "real", n: int = 10, seed: int = 0, views=None):
+def render_views(lens, board: Board, difficulty: str = "real", n: int = 10, seed: int = 0, views=None, only=None):
     """``n`` frames of ``board`` through ``lens`` (in memory, for tests and benches): a list of
     (uint16 image, true corners (W*H, 2) px with NaN out of view, occluded corner mask). ``views``:
-    BoardViews to render instead of drawing poses (one image each)."""
+    BoardViews to render instead of drawing poses (one image each). ``only``: the frame numbers to
+    render (each frame draws from its own generator, so frame k is the same as in the full set)."""
     from platform_tools.rig.cameras import imagersize
 
     from .difficulty import level
@@ -73,6 +74,8 @@ def render_views(lens, board: Board, difficulty: str = "real", n: int = 10, seed
     sensor = Sensor.make(rng, (H_img, W_img), diff)
     out = []
     for k in range(n if views is None else len(views)):
+        if only is not None and k not in only:
+            continue
         irng = np.random.default_rng([seed, k])
         view = sample_view(irng, lens, board, diff) if views is None else views[k]
         img, occluded, _ = render_image(irng, lens, board, view, diff, sensor)
