@@ -12,6 +12,7 @@ from platform_tools.rig.conventions import UserError, add_output_options, print_
 
 from calibration.formats.corners_vnl import BoardCorners, format_corners
 from calibration.detect import ImageError, detect_files, list_images
+from calibration.detect.batch import board_size_problem
 from calibration.commands.synth import parse_board
 from calibration.targets import TARGET_KINDS, TargetError
 
@@ -33,7 +34,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "circle grid follows the rule in docs/calibration.md (\"Circle grids\").",
         epilog="Exit codes: 0 a board found in at least one image (corners.vnl and detections.json written); "
                "2 bad input (an unreadable or corrupt image, two images of one file name, a --board the --target "
-               "cannot have, no board found in any image), one line, nothing written.")
+               "cannot have, views showing a board larger than --board, no board found in any image), one line, "
+               "nothing written.")
     p.add_argument("--images", required=True, metavar="DIR|GLOB", help="a folder of images or a quoted glob")
     p.add_argument("--board", required=True, metavar="WxH",
                    help="inner corners across x down, e.g. 10x7 (circle-grid: discs across x down; "
@@ -60,6 +62,9 @@ def cmd_detect(args: argparse.Namespace) -> int:
         results = detect_files(files, (W, H), strict=True, show_progress=not args.quiet, target=args.target)
     except ImageError as exc:
         raise UserError(f"{exc}; nothing written") from None
+    why = board_size_problem(results, (W, H))
+    if why:
+        raise UserError(f"{args.images}: {why}; nothing written")
     names = [r.path.name for r in results]
     if len(set(names)) != len(names):
         raise UserError(f"{args.images}: two images share a file name; the corners file names images by "

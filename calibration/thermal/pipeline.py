@@ -37,6 +37,7 @@ def detect(images: str, board: tuple[int, int], square_m: float,
     are bad input; saturated or blank images are skipped and named (all of them unusable is bad input
     too). ``board``: inner corners (W, H); ``square_m``: the square size in metres."""
     from calibration.detect import ImageError, detect_files, list_images
+    from calibration.detect.batch import board_size_problem
     from calibration.formats.corners_vnl import BoardCorners, format_corners
     from calibration.intrinsics.observations import from_detections
     try:
@@ -55,6 +56,9 @@ def detect(images: str, board: tuple[int, int], square_m: float,
     good = [r for r in results if r.detection is not None]
     if not good:
         raise UserError(f"--images {images}: none of the {len(results)} images is usable: {bad[0].error}")
+    why = board_size_problem(good, board)
+    if why:
+        raise UserError(f"--images {images}: {why}; nothing written")
     for r in bad:
         log.warning("skipped %s", r.error)
     sizes = {r.imagersize for r in good}

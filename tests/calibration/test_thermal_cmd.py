@@ -100,11 +100,13 @@ def test_calibrate_validate_end_to_end_and_wrong_board(synth_set, tmp_path, caps
     # and the verdict never calls a model trusted that is far from the truth
     assert grade != "trusted" or v["rms_px"] <= 0.3
 
-    # the wrong board size: nothing found, exit 1, the previous output untouched
+    # the wrong board size (the board is larger): bad input naming the size the views show, exit 2,
+    # the previous output untouched (was exit 1, "too little to solve", before the set-level check of
+    # calibration/detect/batch.board_size_problem)
     before = sorted(p.name for p in out.iterdir())
     code, _, err = run(capsys, "thermal", "--images", str(src), "--board", "9x9", "--square", "0.04",
                        "--out", str(out))
-    assert code == 1 and "--board" in err
+    assert code == 2 and "larger than the --board 9x9" in err and "e.g. --board 10x" in err, err
     assert sorted(p.name for p in out.iterdir()) == before
 
 
