@@ -107,7 +107,7 @@ def cmd_thermal(args: argparse.Namespace) -> int:
         check_target_board(args.target, board)
     except TargetError as exc:
         raise UserError(str(exc)) from None
-    args.circle_radius_m = _circle_radius(args, square)
+    args.circle_radius_m = circle_radius(args, square)
     spec = rig.camera_model(rig.desc.sensors.thermal.camera_model)
     if args.topic and args.bag is None:
         raise UserError("--topic goes with --bag (a recording); --images reads image files")
@@ -129,7 +129,7 @@ def cmd_thermal(args: argparse.Namespace) -> int:
     return _write_and_report(args, obs, solution, out)
 
 
-def _circle_radius(args, square: float) -> float | None:
+def circle_radius(args, square: float) -> float | None:
     """The disc radius whose centroid bias the solve takes off (None: not a circle grid, or
     --no-centroid-correction); a radius the board cannot have is bad input."""
     from calibration.intrinsics.circle_bias import CircleBiasError, check_radius

@@ -15,6 +15,7 @@ from platform_tools.rig.conventions import (CheckFailed, UserError, add_output_o
 from platform_tools.rig.progress import progress
 
 from calibration.commands.synth import parse_board
+from calibration.commands.thermal import circle_radius
 from calibration.targets import TARGET_KINDS
 
 DEFAULT_MAX_EPIPOLAR_RMS_PX = 0.5
@@ -57,6 +58,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "cv2.fisheye.stereoCalibrate / stereoRectify (default: thermal_opencv.yaml beside each "
                         "model when both are fisheye)")
     p.add_argument("--right-fisheye", type=Path, metavar="R.yaml", help="the right camera's (as --left-fisheye)")
+    p.add_argument("--circle-radius", type=float, default=None, metavar="METRES",
+                   help="circle grids: the discs' radius (default 0.3 x --square); each disc's centroid bias is "
+                        "taken off in both cameras, iterated with the pose solved (as calibrate thermal does)")
+    p.add_argument("--no-centroid-correction", action="store_true",
+                   help="circle grids: solve from the detected centroids as they are (to compare)")
     p.add_argument("--refine-intrinsics", action="store_true",
                    help="solve both lenses jointly with the pose (default: held at the mono models)")
     p.add_argument("--min-views", type=int, default=None, metavar="N",
@@ -172,6 +178,7 @@ def cmd_thermal_stereo(args: argparse.Namespace) -> int:
     for name in ("max_epipolar_rms", "tolerance_mm", "tolerance_deg"):
         if not getattr(args, name) > 0:
             raise UserError(f"--{name.replace('_', '-')} {getattr(args, name)}: must be > 0")
+    radius_m = circle_radius(args, args.square)
     left, right = read_model(args.left, "--left"), read_model(args.right, "--right")
     check_models(left, right, (args.left, args.right))
     fisheye = fisheye_lenses(args, (left, right))
@@ -192,6 +199,10 @@ def cmd_thermal_stereo(args: argparse.Namespace) -> int:
         raise UserError(f"{args.images}: {exc}; nothing written") from None
 
     shared = obs.subset(obs.shared())
+    correction = None
+    if radius_m is not None:
+        from calibration.stereo.centroids import solve_pair_corrected
+        sol, shared, correction = solve_pair_corrected(obs, sol, radius_m, verbose=args.verbose > 0)
     rect = rectify.rectified_models(sol.models)
     maps = rectify.rectification_maps(sol.models, rect)
     epi = rectify.epipolar_stats(rectify.row_disparity(sol.models, rect, shared.left, shared.right))
@@ -224,6 +235,7 @@ def cmd_thermal_stereo(args: argparse.Namespace) -> int:
         "from_cad": diff, "epipolar": epi, "epipolar_at_cad": epi_seed,
         "rectified": {"lensmodel": rect[0].intrinsics()[0], "imagersize": [int(x) for x in rect[0].imagersize()],
                       "baseline_mm": diff["baseline_mm"]},
+        "centroid_correction": correction,
         "opencv_fisheye_cross_check": check, "warnings": warnings, "rig_hash": rig.hash, "out": str(args.out)}
     files = all_files(sol.models, rect, maps, report, seed_note="seeded from the CAD pose")
     with atomic.OutputDir(args.out) as stage:

@@ -37,6 +37,7 @@ class StereoSolution:
     n_views: int
     n_outliers: int
     refined_intrinsics: bool
+    optimization_inputs: dict | None = None   # the solved mrcal problem (centroids.py re-solves it warm)
 
     @property
     def T_left_right(self) -> Pose:
@@ -134,11 +135,17 @@ def solve_pair(obs: StereoObservations, lenses, rt_right_left_seed: np.ndarray, 
             oi.update(do_optimize_intrinsics_core=True, do_optimize_intrinsics_distortions=True,
                       do_optimize_calobject_warp=True, do_apply_regularization=True)
             stats = mrcal.optimize(**oi)
+    return solution(oi, obs.n, int(stats.get("Noutliers", 0)), refine_intrinsics)
+
+
+def solution(oi: dict, n_views: int, n_outliers: int, refined_intrinsics: bool) -> StereoSolution:
+    """The StereoSolution of the solved mrcal problem ``oi``."""
+    import mrcal
     r = residuals_px(oi)
     rms = tuple(float(np.sqrt(np.nanmean(np.sum(r[c::2] ** 2, axis=-1)))) for c in (0, 1))
     models = tuple(mrcal.cameramodel(optimization_inputs=oi, icam_intrinsics=c) for c in (0, 1))
-    return StereoSolution(models, np.array(oi["extrinsics_rt_fromref"][0], float), rms, obs.n,
-                          int(stats.get("Noutliers", 0)), refine_intrinsics)
+    return StereoSolution(models, np.array(oi["extrinsics_rt_fromref"][0], float), rms, n_views, n_outliers,
+                          refined_intrinsics, oi)
 
 
 def pose_difference(T_seed: Pose, T: Pose) -> dict:
