@@ -8,30 +8,56 @@ import itertools
 import cv2
 import numpy as np
 
-from .recording import Recording, header_stamp, mcap_reader
+from . import mcapscan
+from .recording import Recording, compressed_fields, header_stamp, image_fields, mcap_reader
 
 #: the streams the export reads images of
 IMAGE_STREAMS = ("zed_left", "zed_right", "zed_depth", "thermal_left", "thermal_right")
 
 
-def decode_image(schema_name: str, msg) -> np.ndarray:
-    if schema_name.endswith("CompressedImage"):
-        img = cv2.imdecode(np.frombuffer(bytes(msg.data), np.uint8), cv2.IMREAD_UNCHANGED)
-        if img is None:
-            raise ValueError(f"undecodable {msg.format} image")
-        return cv2.cvtColor(img, cv2.COLOR_GRAY2BGR) if img.ndim == 2 else img[..., :3]
-    dtypes = {"mono16": (np.uint16, 1), "16UC1": (np.uint16, 1), "32FC1": (np.float32, 1), "mono8": (np.uint8, 1),
-              "8UC1": (np.uint8, 1), "bgr8": (np.uint8, 3), "rgb8": (np.uint8, 3), "bgra8": (np.uint8, 4)}
-    if msg.encoding not in dtypes:
-        raise ValueError(f"unsupported image encoding {msg.encoding!r}")
-    dt, ch = dtypes[msg.encoding]
-    dt = np.dtype(dt).newbyteorder(">" if msg.is_bigendian else "<")
-    row = np.frombuffer(bytes(msg.data), np.uint8).reshape(msg.height, msg.step)
-    img = row[:, :msg.width * ch * dt.itemsize].copy().view(dt).reshape(msg.height, msg.width, ch)
-    img = img.astype(dt.newbyteorder("="))
-    if msg.encoding == "rgb8":
+#: ROS image encoding -> (numpy dtype, channels)
+ENCODINGS = {"mono16": (np.uint16, 1), "16UC1": (np.uint16, 1), "32FC1": (np.float32, 1), "mono8": (np.uint8, 1),
+             "8UC1": (np.uint8, 1), "bgr8": (np.uint8, 3), "rgb8": (np.uint8, 3), "bgra8": (np.uint8, 4)}
+
+
+def _compressed(buf, fmt: str) -> np.ndarray:
+    img = cv2.imdecode(np.frombuffer(buf, np.uint8), cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise ValueError(f"undecodable {fmt} image")
+    return cv2.cvtColor(img, cv2.COLOR_GRAY2BGR) if img.ndim == 2 else img[..., :3]
+
+
+def _raw(buf, height: int, width: int, encoding: str, bigendian: bool, step: int, offset: int = 0) -> np.ndarray:
+    if encoding not in ENCODINGS:
+        raise ValueError(f"unsupported image encoding {encoding!r}")
+    dt, ch = ENCODINGS[encoding]
+    dt = np.dtype(dt).newbyteorder(">" if bigendian else "<")
+    row = np.frombuffer(buf, np.uint8, count=height * step, offset=offset).reshape(height, step)
+    # a copy (writable, owning its pixels) even where the rows are contiguous in the message
+    img = row[:, :width * ch * dt.itemsize].copy().view(dt).reshape(height, width, ch)
+    if not dt.isnative:
+        img = img.astype(dt.newbyteorder("="))
+    if encoding == "rgb8":
         img = img[..., ::-1]
     return img[..., 0] if ch == 1 else np.ascontiguousarray(img[..., :3])
+
+
+def decode_cdr(schema_name: str, data) -> np.ndarray:
+    """The image of a CDR-serialised ``sensor_msgs/Image`` or ``CompressedImage`` (bytes or a memoryview), decoded
+    from the message's bytes where they lie (one copy of a raw image's pixels, none of a compressed one's): the
+    same array as :func:`decode_image` of the message mcap_ros2 deserialises."""
+    if schema_name.endswith("CompressedImage"):
+        fmt, offset, n = compressed_fields(data)
+        return _compressed(data[offset:offset + n], fmt)
+    height, width, encoding, bigendian, step, offset = image_fields(data)
+    return _raw(data, height, width, encoding, bigendian, step, offset)
+
+
+def decode_image(schema_name: str, msg) -> np.ndarray:
+    """The image of a message as mcap_ros2 deserialises it (fields ``data``, ``format`` or ``encoding``...)."""
+    if schema_name.endswith("CompressedImage"):
+        return _compressed(bytes(msg.data), msg.format)
+    return _raw(bytes(msg.data), msg.height, msg.width, msg.encoding, msg.is_bigendian, msg.step)
 
 
 def windows(log_ns, spans) -> list[tuple[int, int]]:
@@ -66,30 +92,61 @@ def windows(log_ns, spans) -> list[tuple[int, int]]:
 
 def iter_frames(files: list[str], wanted: dict[tuple[str, int], object], log_ns):
     """Decode the wanted (topic, header stamp) messages, logged at the given log times, of the given files; only the
-    MCAP chunks holding one of those log times are decompressed, each once (:func:`windows`)."""
-    from mcap_ros2.decoder import DecoderFactory
+    MCAP chunks holding one of those log times are decompressed, each once (:func:`windows`), and the images are
+    decoded from the chunk's bytes where they lie (:mod:`.mcapscan`, :func:`decode_cdr`); a file without a chunk
+    index goes through mcap's reader."""
     topics = sorted({t for t, _ in wanted})
-    factory, decoders = DecoderFactory(), {}
     for f in files:
         with open(f, "rb") as fh:
             reader = mcap_reader(fh, f)
             summary = reader.get_summary()
-            spans = [(c.message_start_time, c.message_end_time) for c in (summary.chunk_indexes if summary else [])]
-            for lo_ns, hi_ns in windows(log_ns, spans):
-                try:    # mcap >= 1.3 names the window bounds; older releases take start_time / end_time
-                    messages = reader.iter_messages(topics=topics, starting_at=lo_ns, ending_at=hi_ns,
-                                                    log_time_order=False)
-                except TypeError:
-                    messages = reader.iter_messages(topics=topics, start_time=lo_ns, end_time=hi_ns + 1,
-                                                    log_time_order=False)
-                for schema, channel, msg in messages:
-                    key = (channel.topic, header_stamp(msg.data))
-                    if key not in wanted:
-                        continue
-                    dec = decoders.get((f, schema.id))
-                    if dec is None:
-                        dec = decoders[(f, schema.id)] = factory.decoder_for("cdr", schema)
-                    yield wanted[key], key[1], decode_image(schema.name, dec(msg.data))
+            if not mcapscan.has_chunk_index(summary):
+                yield from _iter_frames_mcap(reader, f, topics, wanted, log_ns)
+                continue
+            spans = [(c.message_start_time, c.message_end_time) for c in summary.chunk_indexes]
+            wins = windows(log_ns, spans)
+            starts = [a for a, _ in wins]
+            ids = {cid: c.topic for cid, c in summary.channels.items() if c.topic in topics}
+            # the chunks a window reaches into, as mcap's reader reads them for a time range
+            chunks = [c for c in summary.chunk_indexes if set(ids) & set(c.message_index_offsets) and
+                      _overlaps(wins, starts, c.message_start_time, c.message_end_time)]
+            for cid, log_time, data in mcapscan.iter_messages(fh, summary, ids, log_time_order=False, chunks=chunks):
+                i = bisect.bisect_right(starts, log_time) - 1
+                if i < 0 or log_time > wins[i][1]:          # outside every window: not read by a time range
+                    continue
+                key = (ids[cid], header_stamp(data))
+                if key in wanted:
+                    channel = summary.channels[cid]
+                    yield wanted[key], key[1], decode_cdr(summary.schemas[channel.schema_id].name, data)
+
+
+def _overlaps(wins, starts, a: int, b: int) -> bool:
+    """Whether the span [a, b] meets one of the sorted, disjoint windows."""
+    i = bisect.bisect_right(starts, b) - 1          # the last window starting at or before b
+    return i >= 0 and wins[i][1] >= a
+
+
+def _iter_frames_mcap(reader, f, topics, wanted, log_ns):
+    """:func:`iter_frames` of one file through mcap's reader and mcap_ros2's decoder (no chunk index)."""
+    from mcap_ros2.decoder import DecoderFactory
+    factory, decoders = DecoderFactory(), {}
+    summary = reader.get_summary()
+    spans = [(c.message_start_time, c.message_end_time) for c in (summary.chunk_indexes if summary else [])]
+    for lo_ns, hi_ns in windows(log_ns, spans):
+        try:    # mcap >= 1.3 names the window bounds; older releases take start_time / end_time
+            messages = reader.iter_messages(topics=topics, starting_at=lo_ns, ending_at=hi_ns,
+                                            log_time_order=False)
+        except TypeError:
+            messages = reader.iter_messages(topics=topics, start_time=lo_ns, end_time=hi_ns + 1,
+                                            log_time_order=False)
+        for schema, channel, msg in messages:
+            key = (channel.topic, header_stamp(msg.data))
+            if key not in wanted:
+                continue
+            dec = decoders.get((f, schema.id))
+            if dec is None:
+                dec = decoders[(f, schema.id)] = factory.decoder_for("cdr", schema)
+            yield wanted[key], key[1], decode_image(schema.name, dec(msg.data))
 
 
 def probe_sizes(rec: Recording) -> dict[str, tuple[int, int]]:

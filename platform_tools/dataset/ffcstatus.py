@@ -64,6 +64,26 @@ def rows(type_name: str, msg, log_ns: int, last_frame_stamp: int | None) -> list
     return out
 
 
+#: the key of the device's status values (firmware/device/clockstep.py) holding the host clock's steps since
+#: usb_cam started, in ns (sync.device_clock_steps)
+CLOCK_STEP_KEY = "clock_step_ns"
+
+
+def clock_step_values(msg) -> dict[int, int]:
+    """``{header stamp ns: clock_step_ns}`` of one decoded DiagnosticArray status (empty when no status of it
+    holds :data:`CLOCK_STEP_KEY` as a whole number)."""
+    stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+    out = {}
+    for st in msg.status:
+        values = {kv.key: kv.value for kv in st.values}
+        if CLOCK_STEP_KEY in values:
+            try:
+                out[stamp] = int(values[CLOCK_STEP_KEY])
+            except ValueError:
+                continue
+    return out
+
+
 #: how many triggers a status stream may be offset from its frames and still be realigned by an FFC freeze
 MAX_LAG_FRAMES = 3
 #: frames in a row whose image repeats: an FFC freeze (noise never repeats exactly)

@@ -75,6 +75,9 @@ class Recording:
     #: camera (zed_left, zed_right, thermal_left, thermal_right) -> its latest sensor_msgs/CameraInfo, as
     #: {"topic", "width", "height", "distortion_model", "d", "k", "p"} (lists of floats)
     camera_info: dict = field(default_factory=dict)
+    #: thermal camera -> {frame stamp ns: clock_step_ns} of its DiagnosticArray status (the device node's host
+    #: clock steps, sync.device_clock_steps), read by the index's one pass; None: not read (sync reads them)
+    clock_step_values: dict | None = None
 
     def has(self, name: str) -> bool:
         return name in self.streams and len(self.streams[name].stamp_ns) > 0
@@ -230,26 +233,50 @@ def _align(pos: int, n: int) -> int:
     return 4 + ((pos - 4 + n - 1) // n) * n
 
 
-def image_layout(data: bytes) -> tuple[int, int, int, int]:
-    """(height, width, step, offset of the pixel bytes) of a CDR-serialised sensor_msgs/Image, read
-    from its fields without copying the pixels."""
+def _cdr_string(data, pos: int, u32) -> tuple[str, int]:
+    """A CDR string at ``pos`` (length with its NUL, bytes): (the text, the position after it)."""
+    n = u32.unpack_from(data, pos)[0]
+    return bytes(data[pos + 4:pos + 4 + n]).rstrip(b"\0").decode("utf-8", "replace"), pos + 4 + n
+
+
+def image_fields(data) -> tuple[int, int, str, bool, int, int]:
+    """(height, width, encoding, is_bigendian, step, offset of the pixel bytes) of a CDR-serialised
+    sensor_msgs/Image (bytes or a memoryview), read from its fields without copying the pixels."""
     endian = "<" if data[1] == 1 else ">"
     u32 = struct.Struct(endian + "I")
-    pos = 12                                             # encapsulation, stamp sec + nanosec
-    pos += 4 + u32.unpack_from(data, pos)[0]             # frame_id
+    _, pos = _cdr_string(data, 12, u32)                  # after encapsulation, stamp sec + nanosec: frame_id
     pos = _align(pos, 4)
     height, width = struct.unpack_from(endian + "II", data, pos)
-    pos += 8
-    pos += 4 + u32.unpack_from(data, pos)[0]             # encoding
-    pos += 1                                             # is_bigendian
-    pos = _align(pos, 4)
+    encoding, pos = _cdr_string(data, pos + 8, u32)
+    bigendian = bool(data[pos])
+    pos = _align(pos + 1, 4)
     step = u32.unpack_from(data, pos)[0]
     pos = _align(pos + 4, 4)
     n = u32.unpack_from(data, pos)[0]
     pos += 4
     if n < height * step or pos + n > len(data):
         raise ValueError(f"sensor_msgs/Image of {height} rows x {step} bytes holds {n} bytes")
+    return height, width, encoding, bigendian, step, pos
+
+
+def image_layout(data: bytes) -> tuple[int, int, int, int]:
+    """(height, width, step, offset of the pixel bytes) of a CDR-serialised sensor_msgs/Image, read
+    from its fields without copying the pixels."""
+    height, width, _, _, step, pos = image_fields(data)
     return height, width, step, pos
+
+
+def compressed_fields(data) -> tuple[str, int, int]:
+    """(format, offset, length of the compressed bytes) of a CDR-serialised sensor_msgs/CompressedImage."""
+    endian = "<" if data[1] == 1 else ">"
+    u32 = struct.Struct(endian + "I")
+    _, pos = _cdr_string(data, 12, u32)                  # frame_id
+    fmt, pos = _cdr_string(data, _align(pos, 4), u32)
+    pos = _align(pos, 4)
+    n = u32.unpack_from(data, pos)[0]
+    if pos + 4 + n > len(data):
+        raise ValueError(f"sensor_msgs/CompressedImage of {n} bytes holds {len(data) - pos - 4}")
+    return fmt, pos + 4, n
 
 
 def telemetry_rows(rig, width: int, height: int) -> int:
@@ -284,6 +311,22 @@ def _info(m, topic: str) -> dict:
     return {"topic": topic, "width": int(m.width), "height": int(m.height),
             "distortion_model": str(m.distortion_model), "d": [float(x) for x in m.d],
             "k": [float(x) for x in m.k], "p": [float(x) for x in m.p]}
+
+
+def _messages(reader, fh, topics):
+    """(schema, channel, log time, data) of the ``topics``' messages of one open MCAP file in log-time order: read
+    straight from its chunks (:mod:`.mcapscan`: each decompressed once, data not copied) when it has a chunk index,
+    else through mcap's reader (a recovered or unindexed file)."""
+    from . import mcapscan
+    summary = reader.get_summary()
+    if not mcapscan.has_chunk_index(summary):
+        for schema, channel, msg in reader.iter_messages(topics=topics, log_time_order=True):
+            yield schema, channel, msg.log_time, msg.data
+        return
+    ids = {cid for cid, c in summary.channels.items() if c.topic in set(topics)}
+    for cid, log_time, data in mcapscan.iter_messages(fh, summary, ids):
+        channel = summary.channels[cid]
+        yield summary.schemas.get(channel.schema_id), channel, log_time, data
 
 
 def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, topic_map=None) -> Recording:
@@ -324,6 +367,7 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
     from_telemetry: dict[str, list[tuple[int, int]]] = {c: [] for c in ("thermal_left", "thermal_right")}
     tele_rows: dict[tuple[str, int, int], int] = {}
     infos: dict[str, dict] = {}
+    clock_steps: dict[str, dict[int, int]] = {c: {} for c in status_topics.values()}
     last_stamp: dict[str, int] = {}
     decoder = DecoderFactory()
     decoders: dict[int, object] = {}
@@ -331,28 +375,29 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
     for fi, f in enumerate(files):
         try:
             with open(f, "rb") as fh:
-                reader = mcap_reader(fh, f)
-                for schema, channel, msg in reader.iter_messages(topics=wanted, log_time_order=True):
+                for schema, channel, log_time, data in _messages(mcap_reader(fh, f), fh, wanted):
                     s = by_topic.get(channel.topic)
                     if s is not None:
                         frozen, counter = False, -1
-                        stamp = header_stamp(msg.data)
+                        stamp = header_stamp(data)
                         if s.startswith("thermal"):
-                            tail, counter = _thermal_tail(msg.data, s, stamp, rig, tele_rows, from_telemetry)
+                            tail, counter = _thermal_tail(data, s, stamp, rig, tele_rows, from_telemetry)
                             frozen = tails.get(s) == tail
                             tails[s] = tail
                             last_stamp[s] = stamp
-                        cols[s].append((stamp, msg.log_time, fi, frozen, counter))
+                        cols[s].append((stamp, log_time, fi, frozen, counter))
                         continue
                     dec = decoders.get((fi, schema.id))
                     if dec is None:
                         dec = decoders[(fi, schema.id)] = decoder.decoder_for("cdr", schema)
-                    m = dec(msg.data)
+                    m = dec(bytes(data))
                     if channel.topic in info_topics:
                         infos[info_topics[channel.topic]] = _info(m, channel.topic)
                         continue
                     cam = status_topics[channel.topic]
-                    status[cam] += ffcstatus.rows(status_types[channel.topic], m, msg.log_time, last_stamp.get(cam))
+                    status[cam] += ffcstatus.rows(status_types[channel.topic], m, log_time, last_stamp.get(cam))
+                    if status_types[channel.topic] == ffcstatus.DIAGNOSTIC:
+                        clock_steps[cam].update(ffcstatus.clock_step_values(m))
         except (McapError, EOFError, struct.error, ValueError) as exc:
             raise RecordingError(f"{f}: damaged MCAP ({type(exc).__name__}: {exc}); "
                                  f"run again with --recover to salvage what is readable") from None
@@ -378,7 +423,8 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
             lag[cam] = ffcstatus.frame_lag(status[cam], st.stamp_ns, st.frozen, k)
             status[cam] = ffcstatus.shifted(status[cam], st.stamp_ns, lag[cam], k)
     rec = Recording(name, Path(path), files, out, status, status_source=source, recovered=notes,
-                    layout=lay.name, camera_info=infos, status_lag_frames=lag)
+                    layout=lay.name, camera_info=infos, status_lag_frames=lag,
+                    clock_step_values={c: v for c, v in clock_steps.items() if v})
     rec._topics = dict(topics)          # every topic of the layout (streams, status, camera_info)
     return rec
 

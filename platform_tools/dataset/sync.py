@@ -30,7 +30,7 @@ import numpy as np
 import logging
 
 from .recording import CAMERAS, Recording, RecordingError
-from . import clocksteps, counters, motion, trigger as trig
+from . import clocksteps, counters, ffcstatus, motion, trigger as trig
 
 log = logging.getLogger(__name__)
 
@@ -386,14 +386,14 @@ def stream_steps(rec: Recording, rig) -> tuple["trig.Assignment", dict, dict]:
     return out, used, own
 
 
-#: the keys of the device's status values (firmware/device/clockstep.py), read by name
-CLOCK_STEP_KEY = "clock_step_ns"
-
-
 def device_clock_steps(rec: Recording) -> dict[str, dict[int, int]]:
     """Per thermal camera: frame stamp -> ``clock_step_ns`` (the host clock's steps since usb_cam started, as the
     device's FFC status node publishes them in each frame's DiagnosticArray, header stamp = the frame's), from its
-    status topic; empty when the recording has no such values (another node, a Bool status, none)."""
+    status topic; empty when the recording has no such values (another node, a Bool status, none). The index
+    (recording.open_recording) reads them in its one pass over the file; a Recording without them
+    (``clock_step_values`` None) has its status topics read here."""
+    if rec.clock_step_values is not None:
+        return {c: dict(v) for c, v in rec.clock_step_values.items() if v}
     from mcap.exceptions import McapError
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
@@ -409,15 +409,7 @@ def device_clock_steps(rec: Recording) -> dict[str, dict[int, int]]:
                         continue
                     dec = decoders.get((fi, schema.id)) or decoders.setdefault((fi, schema.id),
                                                                                  decoder.decoder_for("cdr", schema))
-                    m = dec(msg.data)
-                    stamp = m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec
-                    for st in m.status:
-                        values = {kv.key: kv.value for kv in st.values}
-                        if CLOCK_STEP_KEY in values:
-                            try:
-                                out[topics[channel.topic]][stamp] = int(values[CLOCK_STEP_KEY])
-                            except ValueError:
-                                continue
+                    out[topics[channel.topic]].update(ffcstatus.clock_step_values(dec(msg.data)))
         except (McapError, EOFError, ValueError) as exc:
             raise RecordingError(f"{f}: damaged MCAP ({type(exc).__name__}: {exc})") from None
     return {c: v for c, v in out.items() if v}

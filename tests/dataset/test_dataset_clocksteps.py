@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import json
 import struct
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +18,8 @@ import pytest
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
-from platform_tools.dataset import clocksteps, trigger
+from platform_tools.dataset import clocksteps, sync, trigger
+from platform_tools.dataset.recording import open_recording
 from tests.dataset import rosbags_rig
 from tests.dataset.test_dataset_rosbags_pairing import LIMITS, check_pairs, run
 
@@ -221,6 +223,9 @@ def test_the_device_status_sizes_a_host_step(tmp_path, capsys, rig, ms, log_is_s
     and the log times agree. Said in the report; every exported pair is right."""
     spec = rosbags_rig.Spec(steps=((100, ms, "zed"),), imu=False, seed=61)
     bag, truth = write(tmp_path, rig, spec, recorder="steady", log_is_stamp=log_is_stamp, device_status=True)
+    rec = open_recording(bag, rig)          # the index's one pass read the values the status topics hold
+    assert set(rec.clock_step_values) == {"thermal_left", "thermal_right"}
+    assert sync.device_clock_steps(rec) == sync.device_clock_steps(replace(rec, clock_step_values=None))
     code, out, err = run(capsys, "sync-check", str(bag), "--json", *LIMITS)
     assert code == 0, (err, out[-3000:])
     (ev,) = json.loads(out)["clock_steps"]

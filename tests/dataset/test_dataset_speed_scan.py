@@ -1,0 +1,180 @@
+"""Reading MCAP chunks straight (platform_tools.dataset.mcapscan) and decoding images from their CDR bytes
+(decode.decode_cdr), checked against other libraries: files written by mcap's own Writer (zstd, lz4, none; chunks
+overlapping in time, equal log times) read by mcap's reader; messages serialised by rosbags' typestore compared
+with the arrays they were made from; a rosbags-written recording indexed and decoded as mcap's reader would."""
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+from mcap.reader import make_reader
+from mcap.writer import CompressionType, Writer
+from rosbags.typesys import Stores, get_typestore
+
+from platform_tools.dataset import decode, mcapscan, recording
+from platform_tools.dataset.recording import RecordingError, mcap_files, open_recording
+from tests.dataset import rosbags_rig
+
+
+def _mcap_file(compression, seed=0) -> bytes:
+    """Three channels, 600 messages with log times jumping back and forth (chunks overlap in time) and repeated (ties
+    broken by file position), small chunks: what mcap's log-time order has to sort out."""
+    rng = np.random.default_rng(seed)
+    buf = io.BytesIO()
+    w = Writer(buf, chunk_size=2000, compression=compression)
+    w.start()
+    sid = w.register_schema("s", "raw", b"")
+    chans = [w.register_channel(f"/t{i}", "raw", sid) for i in range(3)]
+    for n in range(600):
+        log = int(rng.integers(0, 50)) * 1000 + (n // 100) * 20_000
+        w.add_message(chans[n % 3], log_time=log, publish_time=log, sequence=n,
+                      data=rng.integers(0, 255, int(rng.integers(1, 300)), dtype=np.uint8).tobytes())
+    w.finish()
+    return buf.getvalue()
+
+
+@pytest.mark.parametrize("compression", [CompressionType.ZSTD, CompressionType.LZ4, CompressionType.NONE])
+@pytest.mark.parametrize("ordered", [True, False])
+def test_the_scan_yields_what_mcaps_reader_yields(compression, ordered):
+    data = _mcap_file(compression)
+    reader = make_reader(io.BytesIO(data))
+    summary = reader.get_summary()
+    assert len(summary.chunk_indexes) > 5
+    ids = {cid: c.topic for cid, c in summary.channels.items() if c.topic != "/t1"}
+    want = [(c.topic, m.log_time, m.data) for _, c, m in
+            reader.iter_messages(topics=sorted(ids.values()), log_time_order=ordered)]
+    got = [(ids[cid], t, bytes(d)) for cid, t, d in
+           mcapscan.iter_messages(io.BytesIO(data), summary, set(ids), log_time_order=ordered)]
+    assert got == want and len(got) == 400
+    if ordered:
+        assert [t for _, t, _ in got] == sorted(t for _, t, _ in got)
+        assert got != sorted(got, key=lambda m: m[1])[::-1]          # non-trivial: ties and overlaps exist
+
+
+def test_a_damaged_chunk_is_one_line():
+    data = bytearray(_mcap_file(CompressionType.ZSTD))
+    summary = make_reader(io.BytesIO(bytes(data))).get_summary()
+    c = summary.chunk_indexes[2]
+    data[c.chunk_start_offset + c.chunk_length - 40:c.chunk_start_offset + c.chunk_length - 8] = bytes(32)
+    with pytest.raises(mcapscan.ScanError, match=f"chunk at offset {c.chunk_start_offset}") as exc:
+        list(mcapscan.iter_messages(io.BytesIO(bytes(data)), summary, set(summary.channels)))
+    assert "\n" not in str(exc.value)
+
+
+TS = get_typestore(Stores.ROS2_HUMBLE)
+
+
+def _header():
+    return TS.types["std_msgs/msg/Header"](stamp=TS.types["builtin_interfaces/msg/Time"](sec=5, nanosec=7),
+                                           frame_id="a_frame_id_of_odd_length")
+
+
+@pytest.mark.parametrize("encoding,dtype,ch,pad,big", [
+    ("mono16", np.uint16, 1, 0, False), ("16UC1", np.uint16, 1, 6, True), ("32FC1", np.float32, 1, 4, False),
+    ("mono8", np.uint8, 1, 3, False), ("bgr8", np.uint8, 3, 0, False), ("rgb8", np.uint8, 3, 5, False),
+    ("bgra8", np.uint8, 4, 0, False)])
+def test_a_raw_image_decodes_to_the_array_it_was_made_from(encoding, dtype, ch, pad, big):
+    """sensor_msgs/Image serialised by rosbags, rows padded (step beyond the pixels), either byte order."""
+    rng = np.random.default_rng(3)
+    h, w = 7, 11
+    arr = (rng.random((h, w, ch)) * 1000 if dtype == np.float32 else
+           rng.integers(0, np.iinfo(dtype).max, (h, w, ch))).astype(dtype)
+    if dtype == np.float32:
+        arr[0, 0] = np.nan
+    px = arr.astype(np.dtype(dtype).newbyteorder(">" if big else "<")).tobytes()
+    row = w * ch * np.dtype(dtype).itemsize
+    body = b"".join(px[r * row:(r + 1) * row] + bytes(range(pad)) for r in range(h))
+    msg = TS.types["sensor_msgs/msg/Image"](header=_header(), height=h, width=w, encoding=encoding,
+                                            is_bigendian=int(big), step=row + pad,
+                                            data=np.frombuffer(body, np.uint8))
+    cdr = TS.serialize_cdr(msg, "sensor_msgs/msg/Image")
+    expect = arr[..., 0] if ch == 1 else (arr[..., ::-1] if encoding == "rgb8" else arr[..., :3])
+    for data in (bytes(cdr), memoryview(bytes(cdr))):
+        got = decode.decode_cdr("sensor_msgs/msg/Image", data)
+        assert got.dtype == np.dtype(dtype) and got.dtype.isnative and got.flags.writeable
+        np.testing.assert_array_equal(got, expect)
+    back = TS.deserialize_cdr(cdr, "sensor_msgs/msg/Image")
+    np.testing.assert_array_equal(decode.decode_image("sensor_msgs/msg/Image", back), expect)
+
+
+@pytest.mark.parametrize("fmt", ["png", "jpeg"])
+def test_a_compressed_image_decodes_as_opencv_decodes_its_bytes(fmt):
+    import cv2
+    img = np.random.default_rng(4).integers(0, 255, (9, 13, 3), dtype=np.uint8)
+    enc = cv2.imencode("." + ("jpg" if fmt == "jpeg" else fmt), img)[1].reshape(-1)
+    msg = TS.types["sensor_msgs/msg/CompressedImage"](header=_header(), format=fmt, data=enc)
+    cdr = bytes(TS.serialize_cdr(msg, "sensor_msgs/msg/CompressedImage"))
+    got = decode.decode_cdr("sensor_msgs/msg/CompressedImage", memoryview(cdr))
+    np.testing.assert_array_equal(got, cv2.imdecode(enc, cv2.IMREAD_UNCHANGED))
+    if fmt == "png":
+        np.testing.assert_array_equal(got, img)
+
+
+def test_a_short_message_is_refused():
+    msg = TS.types["sensor_msgs/msg/Image"](header=_header(), height=4, width=4, encoding="mono8", is_bigendian=0,
+                                            step=4, data=np.zeros(16, np.uint8))
+    cdr = bytes(TS.serialize_cdr(msg, "sensor_msgs/msg/Image"))
+    with pytest.raises(ValueError, match="holds"):
+        decode.decode_cdr("sensor_msgs/msg/Image", cdr[:-3])
+
+
+@pytest.fixture(scope="module")
+def bag(tmp_path_factory, rig):
+    bag = tmp_path_factory.mktemp("scan") / "bag"
+    rosbags_rig.write(bag, rosbags_rig.Spec(triggers=40, ffc={}), rosbags_rig.project_layout(rig))
+    return bag
+
+
+@pytest.mark.slow
+def test_a_rosbags_recording_indexes_and_decodes_as_through_mcaps_reader(bag, rig):
+    """The index (stamps, log times, frozen flags, counters, status) equals one built by mcap's reader (the scan
+    switched off), and every image decoded from the chunks equals mcap_ros2's."""
+    (f,) = mcap_files(bag)[1]
+    rec = open_recording(bag, rig)
+    real = mcapscan.has_chunk_index
+    try:
+        mcapscan.has_chunk_index = lambda summary: False
+        ref = open_recording(bag, rig)
+    finally:
+        mcapscan.has_chunk_index = real
+    assert set(rec.streams) == set(ref.streams)
+    for s, st in rec.streams.items():
+        r = ref.streams[s]
+        for field in ("stamp_ns", "log_ns", "file_index", "frozen", "counter"):
+            a, b = getattr(st, field), getattr(r, field)
+            assert (a is None and b is None) or np.array_equal(a, b), (s, field)
+    assert rec.status == ref.status and rec.camera_info == ref.camera_info
+    wanted, logs = {}, []
+    for s in decode.IMAGE_STREAMS:
+        if rec.has(s):
+            st = rec.streams[s]
+            for i in range(0, len(st.stamp_ns), 7):
+                wanted[(st.topic, int(st.stamp_ns[i]))] = (s, i)
+                logs.append(int(st.log_ns[i]))
+    got = {k: img for k, _, img in decode.iter_frames([str(f)], wanted, logs)}
+    with open(f, "rb") as fh:
+        ref_imgs = {k: img for k, _, img in decode._iter_frames_mcap(
+            recording.mcap_reader(fh, f), str(f), sorted({t for t, _ in wanted}), wanted, logs)}
+    assert len(got) == len(wanted) == len(ref_imgs)
+    for k in wanted.values():
+        np.testing.assert_array_equal(got[k], ref_imgs[k])
+
+
+@pytest.mark.slow
+def test_a_damaged_recording_is_one_line(bag, rig, tmp_path):
+    import shutil
+    copy = tmp_path / "bag"
+    shutil.copytree(bag, copy)
+    (f,) = mcap_files(copy)[1]
+    summary = make_reader(open(f, "rb")).get_summary()
+    c = summary.chunk_indexes[len(summary.chunk_indexes) // 2]
+    assert c.compression == ""                  # rosbags writes its chunks uncompressed: the first record's length
+    raw = bytearray(f.read_bytes())
+    first = c.chunk_start_offset + 9 + 28 + 4 + 8    # Chunk header: record head, times, size, crc, "", records length
+    raw[first + 1:first + 9] = (2 ** 40).to_bytes(8, "little")
+    f.write_bytes(bytes(raw))
+    recording._summaries.clear()
+    with pytest.raises(RecordingError, match="damaged MCAP") as exc:
+        open_recording(copy, rig)
+    assert str(f) in str(exc.value) and "\n" not in str(exc.value)
