@@ -3,7 +3,9 @@ pixel with its depth, transform it into the thermal camera with the extrinsics, 
 thermal model; a z-buffer keeps the nearest surface per thermal pixel and bilinear splatting spreads
 each point over its four neighbouring pixels. Pixels without depth (NaN, inf, <= 0) are not splatted.
 
-Two passes over the points (numba, one core):
+Two passes over the points (numba, one core; the points in view first gathered into one (n, 3) array, and every
+thermal pixel's colour sums, weight and depth sum packed side by side in one array beside the z-buffer, so that
+pass 2 touches two cache lines per corner, not four arrays):
 
 1. project every point; each neighbouring pixel it would touch (bilinear weight > 0) keeps the
    nearest depth (the z-buffer);
@@ -67,16 +69,25 @@ def _project(kind, k, x, y, z):
     return k[0] * xpp + k[2], k[1] * ypp + k[3]
 
 
+@numba.njit(cache=True, inline="always")
+def _corner(u0, v0, fu, fv, corner):
+    """Pixel (column, row) and bilinear weight of neighbour ``corner`` (0..3: du = corner & 1, dv = corner >> 1)
+    of a point at (u0 + fu, v0 + fv), u0 and v0 whole, fu and fv in [0, 1)."""
+    du = corner & 1
+    dv = corner >> 1
+    return u0 + du, v0 + dv, (fv if dv else 1.0 - fv) * (fu if du else 1.0 - fu)
+
+
 @numba.njit(cache=True)
-def _points(depth, rays, R, t, kind, k, qext, out_w, out_h, us, vs, zs):
-    """Thermal pixel coordinates and depth of every ZED pixel (NaN: no depth / not in view)."""
+def _points_compact(depth, rays, R, t, kind, k, qext, out_w, out_h, uvz, idx):
+    """Thermal pixel coordinates and depth of the ZED pixels in view (with depth, in front, projecting inside), in
+    pixel order: ``uvz[j]`` (u, v, z) of ZED pixel ``idx[j]`` (flattened); returns how many."""
     H, W = depth.shape
     n = 0
     for r in range(H):
         for c in range(W):
             i = r * W + c
             d = depth[r, c]
-            us[i] = np.nan
             if not (d > 0.0 and d < np.inf):
                 continue
             X = rays[r, c, 0] * d
@@ -93,47 +104,44 @@ def _points(depth, rays, R, t, kind, k, qext, out_w, out_h, us, vs, zs):
                 u, v = _project(kind, k, x, y, z)
             if not (u > -1.0 and u < out_w and v > -1.0 and v < out_h):
                 continue
-            us[i] = u
-            vs[i] = v
-            zs[i] = z
+            uvz[n, 0] = u
+            uvz[n, 1] = v
+            uvz[n, 2] = z
+            idx[n] = i
             n += 1
     return n
 
 
-@numba.njit(cache=True, inline="always")
-def _corner(u0, v0, fu, fv, corner):
-    """Pixel (column, row) and bilinear weight of neighbour ``corner`` (0..3: du = corner & 1, dv = corner >> 1)
-    of a point at (u0 + fu, v0 + fv), u0 and v0 whole, fu and fv in [0, 1)."""
-    du = corner & 1
-    dv = corner >> 1
-    return u0 + du, v0 + dv, (fv if dv else 1.0 - fv) * (fu if du else 1.0 - fu)
-
-
 @numba.njit(cache=True)
-def _splat(us, vs, zs, src, out_h, out_w, tol, acc, wsum, zacc, zbuf):
-    N = us.shape[0]
+def _splat_packed(uvz, idx, n, src, out_h, out_w, tol, zbuf, packed):
+    """The two passes over the ``n`` points in view: pass 0 into the z-buffer ``zbuf`` (h, w; +inf on entry), pass 1
+    into ``packed`` (h, w, C + 2; 0 on entry): the C colour sums, the weight sum, the weighted depth sum of each
+    pixel side by side. The same additions in the same order as three separate arrays: the same sums to the bit."""
     C = src.shape[1]
-    for blend in range(2):                  # pass 0: the z-buffer; pass 1: the surface nearest each pixel blends
-        for i in range(N):
-            u = us[i]
-            if np.isnan(u):
-                continue
-            v = vs[i]
-            z = zs[i]
-            u0 = int(np.floor(u))
-            v0 = int(np.floor(v))
-            for corner in range(4):
-                uu, vv, w = _corner(u0, v0, u - u0, v - v0, corner)
-                if not (0 <= vv < out_h and 0 <= uu < out_w and w > 0.0):
-                    continue
-                if not blend:
-                    if z < zbuf[vv, uu]:
-                        zbuf[vv, uu] = z
-                elif z <= zbuf[vv, uu] * (1.0 + tol):
-                    for ch in range(C):
-                        acc[vv, uu, ch] += w * src[i, ch]
-                    wsum[vv, uu] += w
-                    zacc[vv, uu] += w * z
+    for j in range(n):                      # pass 0: the z-buffer
+        u = uvz[j, 0]
+        v = uvz[j, 1]
+        z = uvz[j, 2]
+        u0 = int(np.floor(u))
+        v0 = int(np.floor(v))
+        for corner in range(4):
+            uu, vv, w = _corner(u0, v0, u - u0, v - v0, corner)
+            if 0 <= vv < out_h and 0 <= uu < out_w and w > 0.0 and z < zbuf[vv, uu]:
+                zbuf[vv, uu] = z
+    for j in range(n):                      # pass 1: the surface nearest each pixel blends
+        u = uvz[j, 0]
+        v = uvz[j, 1]
+        z = uvz[j, 2]
+        u0 = int(np.floor(u))
+        v0 = int(np.floor(v))
+        i = idx[j]
+        for corner in range(4):
+            uu, vv, w = _corner(u0, v0, u - u0, v - v0, corner)
+            if 0 <= vv < out_h and 0 <= uu < out_w and w > 0.0 and z <= zbuf[vv, uu] * (1.0 + tol):
+                for ch in range(C):
+                    packed[vv, uu, ch] += w * src[i, ch]
+                packed[vv, uu, C] += w
+                packed[vv, uu, C + 1] += w * z
 
 
 @dataclass
@@ -191,27 +199,39 @@ class Registrar:
             return np.ascontiguousarray(mrcal.project(p, self.lensmodel, self.intrinsics))
 
     def points(self, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(u, v, z) in the thermal image of every ZED pixel, flattened; u is NaN where there is none."""
+        """(u, v, z) in the thermal image of every ZED pixel, flattened; NaN where there is none."""
+        uvz, idx, n = self._in_view(depth)
+        out = np.full((3, depth.size), np.nan)
+        out[:, idx[:n]] = uvz[:n].T
+        return out[0], out[1], out[2]
+
+    def _in_view(self, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+        """:func:`_points_compact` of a depth map: (uvz, idx, how many)."""
         depth = np.ascontiguousarray(depth, np.float32)
         if depth.shape != self.rays.shape[:2]:
             raise ValueError(f"depth is {depth.shape[1]}x{depth.shape[0]}, the ZED model "
                              f"{self.rays.shape[1]}x{self.rays.shape[0]}")
-        n = depth.size
-        us, vs, zs = np.empty(n, np.float64), np.empty(n, np.float64), np.empty(n, np.float64)
+        uvz, idx = np.empty((depth.size, 3), np.float64), np.empty(depth.size, np.int64)
         qext = self._external_projection(depth) if self.kind == KIND_MRCAL else np.zeros((1, 2))
-        _points(depth, self.rays, self.R, self.t, self.kind, self.k, qext, self.out_w, self.out_h, us, vs, zs)
-        return us, vs, zs
+        n = _points_compact(depth, self.rays, self.R, self.t, self.kind, self.k, qext, self.out_w, self.out_h,
+                            uvz, idx)
+        return uvz, idx, n
+
+    def _packed(self, depth: np.ndarray, src: np.ndarray) -> np.ndarray:
+        """The packed accumulator (h, w, C + 2) of :func:`_splat_packed` after both passes."""
+        uvz, idx, n = self._in_view(depth)
+        flat = src.reshape(idx.shape[0], -1)
+        C = flat.shape[1]
+        packed = np.zeros((self.out_h, self.out_w, C + 2), np.float64)
+        zbuf = np.full((self.out_h, self.out_w), np.inf)
+        _splat_packed(uvz, idx, n, flat, self.out_h, self.out_w, self.tol, zbuf, packed)
+        return packed
 
     def _accumulate(self, depth: np.ndarray, src: np.ndarray):
-        us, vs, zs = self.points(depth)
-        flat = src.reshape(us.shape[0], -1)
-        C = flat.shape[1]
-        acc = np.zeros((self.out_h, self.out_w, C), np.float64)
-        wsum = np.zeros((self.out_h, self.out_w), np.float64)
-        zacc = np.zeros((self.out_h, self.out_w), np.float64)
-        zbuf = np.full((self.out_h, self.out_w), np.inf)
-        _splat(us, vs, zs, flat, self.out_h, self.out_w, self.tol, acc, wsum, zacc, zbuf)
-        return acc, wsum, zacc
+        """(colour sums (h, w, C), weight sum, depth sum) of the splat."""
+        packed = self._packed(depth, src)
+        C = packed.shape[2] - 2
+        return packed[..., :C], packed[..., C], packed[..., C + 1]
 
     def register(self, depth: np.ndarray, src: np.ndarray) -> Result:
         """Splat `src` ((H, W) or (H, W, C), any dtype) into the thermal view."""
@@ -220,12 +240,12 @@ class Registrar:
     def register_u8(self, depth: np.ndarray, src: np.ndarray) -> "Images":
         """The export's images of :meth:`register` in one pass (numba): the same pixels as
         ``Result.image_u8()``, ``mask * 255`` and the depth in mm that the export writes."""
-        acc, wsum, zacc = self._accumulate(depth, src)
-        h, w, C = acc.shape
+        packed = self._packed(depth, src)
+        h, w, C = packed.shape[0], packed.shape[1], packed.shape[2] - 2
         image = np.empty((h, w, C), np.uint8)
         mask = np.empty((h, w), np.uint8)
         depth_mm = np.empty((h, w), np.uint16)
-        n = _finish_u8(acc, wsum, zacc, self.min_weight, image, mask, depth_mm)
+        n = _finish_u8(packed, self.min_weight, image, mask, depth_mm)
         return Images(image if C > 1 else image[..., 0], mask, depth_mm, n / (h * w))
 
 
@@ -239,21 +259,21 @@ class Images:
 
 
 @numba.njit(cache=True)
-def _finish_u8(acc, wsum, zacc, min_weight, image, mask, depth_mm):
-    """:func:`_finish` then the export's conversions, per pixel with the same float32 steps; returns the count of
-    valid pixels."""
-    h, w, C = acc.shape
+def _finish_u8(packed, min_weight, image, mask, depth_mm):
+    """:func:`_finish` then the export's conversions, per pixel with the same float32 steps, from the packed
+    accumulator (:func:`_splat_packed`); returns the count of valid pixels."""
+    h, w, C = packed.shape[0], packed.shape[1], packed.shape[2] - 2
     n = 0
     for r in range(h):
         for c in range(w):
-            ws = wsum[r, c]
+            ws = packed[r, c, C]
             if ws >= min_weight:
                 n += 1
                 mask[r, c] = 255
                 for ch in range(C):
-                    v = np.rint(np.float32(acc[r, c, ch] / ws))
+                    v = np.rint(np.float32(packed[r, c, ch] / ws))
                     image[r, c, ch] = 0 if v < 0 else (255 if v > 255 else np.uint8(v))
-                d = np.float32(zacc[r, c] / ws) * np.float32(1000.0)
+                d = np.float32(packed[r, c, C + 1] / ws) * np.float32(1000.0)
                 if not (d > 0):      # NaN or not positive
                     depth_mm[r, c] = 0
                 elif d > 65535:

@@ -19,12 +19,16 @@ from tests.conftest import REPO
 pytestmark = pytest.mark.slow          # spawned processes that import numba and mrcal
 
 
+#: the registration's numba kernels an export calls
+KERNELS = ("_points_compact", "_splat_packed", "_finish_u8")
+
+
 def _state(_task=None) -> dict:
     """What a worker holds when its first task starts (run as that task, before anything else)."""
     from platform_tools.dataset import register, thermal8
     return {"pid": os.getpid(), "mcap": "mcap.reader" in sys.modules, "mrcal": "mrcal" in sys.modules,
             "setuptools": "setuptools" in sys.modules,
-            "kernels": {n: len(getattr(register, n).signatures) for n in ("_points", "_splat", "_finish_u8")}
+            "kernels": {n: len(getattr(register, n).signatures) for n in KERNELS}
             | {"_apply": len(thermal8._compiled[0].signatures) if thermal8._compiled else 0},
             "env": os.environ.get("SETUPTOOLS_USE_DISTUTILS")}
 
@@ -47,7 +51,7 @@ def test_started_workers_are_warm_before_their_first_task():
         engines.run_pool(_state, [None] * 6, lambda t, r: got.append(r), 2, None, pool)
     assert len(got) == 6 and {g["pid"] for g in got} <= set(spawned)
     for g in got:
-        assert g["mcap"] and g["mrcal"] and g["kernels"] == {"_points": 1, "_splat": 1, "_finish_u8": 1, "_apply": 1}
+        assert g["mcap"] and g["mrcal"] and g["kernels"] == dict.fromkeys(KERNELS, 1) | {"_apply": 1}
         assert g["env"] == "stdlib" and not g["setuptools"]     # mrcal's distutils import did not load setuptools
     assert not any(_alive(p) for p in spawned)                     # ended with the block
 
@@ -83,7 +87,7 @@ def test_the_warm_up_loads_the_specialisations_a_real_export_uses(sim, tmp_path)
         "from platform_tools.dataset.export import Params, export\n"
         "from platform_tools.rig import load_rig\n"
         "def sigs():\n"
-        "    d = {n: [str(s) for s in getattr(register, n).signatures] for n in ('_points', '_splat', '_finish_u8')}\n"
+        f"    d = {{n: [str(s) for s in getattr(register, n).signatures] for n in {KERNELS!r}}}\n"
         "    return d | {'_apply': [str(s) for s in thermal8._kernel().signatures]}\n"
         "chunk.warm_up()\n"
         "a = sigs()\n"
