@@ -9,13 +9,14 @@
    map's coherence: random depths would measure cache misses, not the algorithm).
 
 3. ``--export RECORDING``: the whole export (``platform_tools export ... --workers 2``) of previous code (the
-   dataset package and its command, export_cmd.py, at a git revision, ``--previous REV``, default ``b7c0534``: the
-   code issue 15 item 6 calls "today's"; repeat the option for several, e.g. ``--previous b7c0534 --previous
-   HEAD``; each in a copy of this tree where only the export code differs) beside this tree's, on the same
-   recording, alternating, after one untimed warm-up each (numba compiles into each tree's cache); samples/s end to
-   end (wall clock, indexing included) and the ratios, and the CPU seconds of each run (the command and its workers:
-   what a shared machine's other load disturbs least); then every file of each previous output compared with this
-   tree's (bytes; PNGs that differ are decoded and compared).
+   dataset package, its command export_cmd.py and the CLI's main.py, at a git revision, ``--previous REV``,
+   default ``b7c0534``: the code issue 15 item 6 calls "today's"; repeat the option for several, e.g.
+   ``--previous b7c0534 --previous HEAD``; each in a copy of this tree where only the export code differs)
+   beside this tree's, on the same recording, alternating, after one untimed warm-up each (numba compiles into
+   each tree's cache); samples/s end to end (wall clock, indexing included) and the ratios, and the CPU seconds
+   of each run (the command and its workers: what a shared machine's other load disturbs least); then every file
+   of each previous output compared with this tree's (bytes; PNGs that differ are decoded and compared). Each
+   run's 1-minute load average, as it starts, is printed beside it (the machine may be shared).
    A full-size recording: ``platform_tools simulate-rig --out DIR --duration 12 --scale 1``.
 
 One core for 1 and 2: numba, OpenCV and BLAS are pinned to one thread before they load.
@@ -70,8 +71,9 @@ def rate(fn, n: int) -> float:
     return n / (time.perf_counter() - t)
 
 
-#: the export's code taken from git for a previous run: the dataset package and its command
-PREVIOUS = ("platform_tools/dataset", "platform_tools/cli/export_cmd.py")
+#: the export's code taken from git for a previous run: the dataset package, its command and the CLI's entry point
+#: (which imported every command's module before they were made lazy)
+PREVIOUS = ("platform_tools/dataset", "platform_tools/cli/export_cmd.py", "platform_tools/cli/main.py")
 #: the code before issue 15 item 6's speed work ("today's" in the issue)
 BASELINE = "b7c0534"
 
@@ -92,8 +94,9 @@ def previous_tree(tmp: Path, rev: str = BASELINE) -> Path:
     return tree
 
 
-def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int) -> tuple[float, int, float]:
-    """(wall seconds, samples, CPU seconds) of one `platform_tools export` run with ``tree``'s code. The CPU time
+def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int) -> tuple[float, int, float, float]:
+    """(wall seconds, samples, CPU seconds, the 1-minute load average as it starts) of one `platform_tools export`
+    run with ``tree``'s code. The CPU time
     (user + system, of the command and its workers: getrusage of reaped children) is the figure a shared machine
     disturbs least: other users' load stretches the wall clock, not the work done."""
     import resource
@@ -107,6 +110,7 @@ def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int
     cmd = [sys.executable, "-c", "import sys; from platform_tools.cli.main import main; sys.exit(main())",
            "export", str(recording), "--out", str(out), "--rate", str(rate), "--workers", str(workers),
            "--json", "-q"]
+    load = os.getloadavg()[0]
     t = time.perf_counter()
     r = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True)
     dt = time.perf_counter() - t
@@ -114,7 +118,7 @@ def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int
         raise SystemExit(f"{tree}: export failed: {r.stderr.strip().splitlines()[-1:]}")
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime + after.ru_stime) - (ru.ru_utime + ru.ru_stime)
-    return dt, json.loads(r.stdout)["samples"], cpu
+    return dt, json.loads(r.stdout)["samples"], cpu, load
 
 
 def compare_outputs(a: Path, b: Path) -> dict:
@@ -143,15 +147,17 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
             run_export(tree, recording, tmp / f"warm-{name}", max(rate / 4, 0.25), workers)
         times = {n: [] for n in trees}
         cpu = {n: [] for n in trees}
+        loads = {n: [] for n in trees}
         samples = {}
         for _ in range(repeats):
             for name, tree in trees.items():
-                dt, samples[name], c = run_export(tree, recording, tmp / f"out-{name}", rate, workers)
+                dt, samples[name], c, load = run_export(tree, recording, tmp / f"out-{name}", rate, workers)
                 times[name].append(dt)
                 cpu[name].append(c)
+                loads[name].append(load)
         sps = {n: samples[n] / min(t) for n, t in times.items()}
         return {"recording": str(recording), "rate_hz": rate, "workers": workers, "samples": samples,
-                "seconds": times, "samples_per_s": sps, "cpu_seconds": cpu,
+                "seconds": times, "samples_per_s": sps, "cpu_seconds": cpu, "load_average": loads,
                 "ratio": {rev: sps["new"] / sps[rev] for rev in revs},
                 "cpu_ratio": {rev: min(cpu[rev]) * samples["new"] / (min(cpu["new"]) * samples[rev]) for rev in revs},
                 "outputs": {rev: compare_outputs(tmp / f"out-{rev}", tmp / "out-new") for rev in revs}}
@@ -178,7 +184,8 @@ def main(argv=None) -> int:
         for n in r["seconds"]:
             print(f"  {n:<9} {r['samples'][n]:>5} samples in {min(r['seconds'][n]):7.1f} s: "
                   f"{r['samples_per_s'][n]:6.2f} samples/s  (runs: {', '.join(f'{t:.1f}' for t in r['seconds'][n])} s;"
-                  f" CPU {', '.join(f'{t:.1f}' for t in r['cpu_seconds'][n])} s)")
+                  f" CPU {', '.join(f'{t:.1f}' for t in r['cpu_seconds'][n])} s; load average "
+                  f"{', '.join(f'{t:.1f}' for t in r['load_average'][n])})")
         for rev, ratio in r["ratio"].items():
             o = r["outputs"][rev]
             print(f"  ratio new / {rev}: {ratio:.2f}x in samples/s (wall clock), {r['cpu_ratio'][rev]:.2f}x in "
