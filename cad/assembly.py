@@ -24,6 +24,8 @@ from .parts import camera_mounts, case, cooling, handle, power_mounts
 PETG = (0.93, 0.45, 0.10, 1.0)       # printed parts
 PETG_DARK = (0.22, 0.22, 0.24, 1.0)  # case
 COPPER = (0.78, 0.45, 0.22, 1.0)
+#: the devkit's node: the card's standoffs stand on it
+ORIN_NODE = "jetson_agx_orin"
 
 #: print orientation of every printed part id
 PRINT_SETUPS = {**case.PRINT, **camera_mounts.PRINT, **cooling.PRINT, **handle.PRINT, **power_mounts.PRINT}
@@ -113,8 +115,12 @@ def build(rig: Rig, cache: ShapeCache | None = None) -> Assembly:
     add("zed_mount", "zed_mount", "printed", "mounts", camera_mounts.zed_mount(lay))
     add("thermal_mount", "thermal_mount", "printed", "mounts", camera_mounts.thermal_mount(lay))
     # compute
-    add("jetson_agx_orin", lay.compute.orin.part_id, "bought", "compute", lay.compute.orin, lay.compute.orin_pose, lay.compute.orin.colour)
+    add(ORIN_NODE, lay.compute.orin.part_id, "bought", "compute", lay.compute.orin, lay.compute.orin_pose, lay.compute.orin.colour)
     add("zed_link_quad", lay.compute.card.part_id, "bought", "compute", lay.compute.card, lay.compute.card_pose, lay.compute.card.colour)
+    cs = lay.compute.card_standoff
+    for k, pose in enumerate(lay.compute.card_standoff_poses):
+        add(f"card_standoff_{k}", cs.part_id, "fastener", "compute", cs, pose, cs.colour, length_mm=cs.length_mm,
+            thread=cs.thread, host=ORIN_NODE, kind="standoff")
     so = power_mounts.standoff(lay)
     for k, pt in enumerate(lay.compute.orin.mount_points()):
         p = lay.compute.orin_pose.apply(np.array(pt))

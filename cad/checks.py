@@ -69,6 +69,10 @@ def intended_overlaps(asm: Assembly) -> dict[frozenset, tuple[float, str]]:
             pilot = rig.dim(j.screw_id, "pilot_hole_diameter_mm")
             out[frozenset((screw, j.host))] = (math.pi / 4 * (d * d - pilot * pilot) * j.engagement_mm,
                                                "self-tapping thread cut into the plastic")
+    for n in asm.nodes:
+        if n.props.get("kind") == "standoff":
+            out[frozenset((n.name, n.props["host"]))] = (n.spec.stud_volume_mm3(),
+                                                          f"standoff's {n.spec.stud_mm:g} mm stud in the devkit's thread")
     return out
 
 

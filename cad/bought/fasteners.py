@@ -1,11 +1,13 @@
 """Fasteners, typed in the style of cq_warehouse: a table of thread sizes (``fasteners.yaml`` beside
 this file) that answers a thread's diameter, tap drill, screw and insert and the stock lengths; and
 the two bought fasteners a joint holds, a :class:`Screw` (socket head, its length picked per joint)
-and a heat-set :class:`Insert`, each with the key its BOM line counts it by.
+and a heat-set :class:`Insert`, and the hex :class:`Standoff` a board stands on, each with the key its
+BOM line counts it by.
 
 Screw frame: origin at the centre of the head's bearing face; the shank runs along -z, the head is
 above (z > 0). Insert frame: origin at the centre of its top face (flush with the part's surface);
-its body runs along -z.
+its body runs along -z. Standoff frame: origin at the centre of its body's bottom face (the face that
+bears on the part below); the hex body runs along +z, its male stud along -z.
 """
 from __future__ import annotations
 
@@ -53,9 +55,33 @@ class ThreadSize:
 
 
 @dataclass(frozen=True)
+class StandoffSize:
+    """The standoffs of one thread: the rig part, the screw into its female end, its stock lengths (mm)."""
+    part: str
+    screw: str
+    stock_lengths_mm: tuple[Annotated[float, Gt(0)], ...]
+
+    def pick_length(self, min_mm: float) -> float:
+        """The shortest stock length at least ``min_mm``."""
+        for length in sorted(self.stock_lengths_mm):
+            if length >= min_mm - 1e-6:
+                return float(length)
+        raise ValueError(f"no stock {self.part} is {min_mm:g} mm or longer (the longest is "
+                         f"{max(self.stock_lengths_mm):g} mm, {TABLE.name})")
+
+
+@dataclass(frozen=True)
 class FastenerTable:
     stock_lengths_mm: tuple[Annotated[float, Gt(0)], ...]
     sizes: Mapping[str, ThreadSize]              # by thread name: "M3", "1/4-20 UNC"
+    standoffs: Mapping[str, StandoffSize]        # by thread name
+
+    def standoff(self, thread: str) -> StandoffSize:
+        try:
+            return self.standoffs[thread]
+        except KeyError:
+            raise ValueError(f"no standoff for thread {thread!r}; the fastener table ({TABLE.name}) has "
+                             f"{', '.join(self.standoffs) or 'none'}") from None
 
     def size(self, thread: str) -> ThreadSize:
         try:
@@ -162,3 +188,42 @@ class Insert(BoughtPart):
     def melt_volume_mm3(self) -> float:
         """Plastic the insert displaces: the overlap an interference check must find, no more."""
         return math.pi / 4 * (self.outer_diameter_mm ** 2 - self.hole_diameter_mm ** 2) * self.length_mm
+
+
+@dataclass(frozen=True, kw_only=True)
+class Standoff(BoughtPart):
+    """A male-female hex standoff: a hex body ``length_mm`` long, ``across_flats_mm`` across flats, on
+    a male stud ``stud_mm`` long; its female thread is ``female_depth_mm`` deep from the top face (the
+    body is drawn solid, so a screw's engaged thread is the overlap the interference check expects)."""
+    thread: str
+    diameter_mm: float
+    across_flats_mm: float
+    length_mm: float
+    stud_mm: float
+    female_depth_mm: float
+
+    @classmethod
+    def from_rig(cls, rig: Rig, part_id: str, thread: str, length_mm: float) -> "Standoff":
+        af = rig.dim(part_id, "across_flats_mm")
+        return cls(part_id=part_id, size=(af, af, length_mm), colour=part_colour("brass"), thread=thread,
+                   diameter_mm=thread_diameter_mm(thread), across_flats_mm=af, length_mm=length_mm,
+                   stud_mm=rig.dim(part_id, "male_thread_length_mm"),
+                   female_depth_mm=rig.dim(part_id, "female_thread_depth_mm"))
+
+    @property
+    def across_corners_mm(self) -> float:
+        return self.across_flats_mm / math.cos(math.radians(30))
+
+    @property
+    def bom_key(self) -> str:
+        """Its BOM line: one per standoff part, thread and length ("m2p5_standoff:M2.5x15")."""
+        return f"{self.part_id}:{self.thread}x{self.length_mm:g}"
+
+    def stud_volume_mm3(self) -> float:
+        """The stud's volume: what a tapped hole it is screwed into overlaps."""
+        return math.pi / 4 * self.diameter_mm ** 2 * self.stud_mm
+
+    def build(self) -> cq.Shape:
+        body = cq.Workplane("XY").polygon(6, self.across_corners_mm).extrude(self.length_mm).val()
+        stud = cylinder(self.diameter_mm, self.stud_mm, (0, 0, -self.stud_mm))
+        return body.fuse(stud).clean()

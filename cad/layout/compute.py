@@ -1,14 +1,19 @@
 """The computer behind the cameras: the Jetson AGX Orin on printed standoffs, its port panel facing
 the rear wall, and the ZED Link Quad capture card above it, high enough over the devkit's own fan
-inlet (its top face) for the fan to draw air in round the card's edges. Rig frame, mm."""
+inlet (its top face) for the fan to draw air in round the card's edges, on a hex standoff under each of
+its corner holes (the fastener table's standoff for the card's thread, its stock length the gap). Rig
+frame, mm."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+import numpy as np
 
 from platform_tools.rig import Rig
 from platform_tools.rig.frames import Pose
 
 from cad.bought.base import part_of_kind
+from cad.bought.fasteners import Standoff, fastener_table
 from cad.bought.jetson import JetsonOrin
 from cad.bought.zed_link import ZedLinkQuad
 from cad.geom import Bounds, placed_bounds, pose_xyz
@@ -32,6 +37,8 @@ class Compute:
     fan_diameter: float = 0.0   # the devkit's own fan, drawing from its top face (parts.jetson_agx_orin.dims)
     fan_hub: float = 0.0
     card_gap: float = 0.0       # the devkit's top to the card's underside: the fan inlet's clear height
+    card_standoff: Standoff | None = None      # the card's standoffs (one spec), the gap long
+    card_standoff_poses: tuple[Pose, ...] = ()  # each on the devkit's top, under a card hole
 
 
 def fan_inlet_gap_mm(rig: Rig, fits: Fits) -> float:
@@ -46,8 +53,8 @@ def place_compute(rig: Rig, c: Constants, fits: Fits, cameras: Cameras, mounts: 
                   plates: dict[str, FanPlate]) -> Compute:
     """The Orin right behind the rearmost camera part (ZED X, its mount, the fan plates), standing on
     standoffs tall enough for the floor screws' heads; the capture card over it, ``fan_inlet_gap_mm``
-    above its top (it stood 1 mm above it, on the fan's inlet; its fixings are not modelled), flush
-    with its rear face."""
+    above its top or more (it stood 1 mm above it, on the fan's inlet): the shortest stock standoff of
+    that height, one under each of its holes; flush with its rear face."""
     clear = fits.clear
     orin = JetsonOrin.from_rig(rig, part_of_kind(rig, "computer"))
     cam_back = min([cameras.zed_box.lo[0] - clear, mounts.zed_foot.lo[0] - clear]
@@ -56,11 +63,15 @@ def place_compute(rig: Rig, c: Constants, fits: Fits, cameras: Cameras, mounts: 
     orin_pose = pose_xyz(cam_back - orin.size[0] / 2, 0.0, mounts.floor_z + standoff_h)
     orin_box = placed_bounds(orin.bounds(), orin_pose)
     card = ZedLinkQuad.from_rig(rig, rig.desc.sync.source_part)
-    gap = fan_inlet_gap_mm(rig, fits)
+    so = fastener_table().standoff(card.thread)
+    gap = so.pick_length(fan_inlet_gap_mm(rig, fits))
+    standoff = Standoff.from_rig(rig, so.part, card.thread, gap)
     # flush with the devkit's rear: raised over the fan, its front socket needs the room ahead of it for
     # the GMSL2 coax's S-bend up from the ZED X (centred on the devkit, the bend did not fit: cad/cables.py)
     card_pose = pose_xyz(orin_box.lo[0] + card.size[0] / 2, 0.0, orin_box.hi[2] + gap)
+    feet = tuple(pose_xyz(*card_pose.apply(np.array(pt))[:2], orin_box.hi[2]) for pt in card.mount_points())
     return Compute(orin=orin, orin_pose=orin_pose, orin_box=orin_box, standoff_h=standoff_h, card=card,
                    card_pose=card_pose, card_box=placed_bounds(card.bounds(), card_pose),
                    fan_diameter=rig.dim(orin.part_id, "fan_diameter_mm"),
-                   fan_hub=rig.dim(orin.part_id, "fan_hub_diameter_mm"), card_gap=gap)
+                   fan_hub=rig.dim(orin.part_id, "fan_hub_diameter_mm"), card_gap=gap,
+                   card_standoff=standoff, card_standoff_poses=feet)

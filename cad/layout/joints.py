@@ -144,7 +144,7 @@ class _Joints:
 def place_joints(rig: Rig, c: Constants, fits: Fits, *, cameras: Cameras, cooling: Cooling, mounts: CameraMounts,
                  compute: Compute, power: Power, case: Case, handles: Handles) -> tuple[Joint, ...]:
     """Every joint, in assembly order: case split, handles, thermal bar, heat sinks, ZED mount and
-    camera, fans, Orin, battery dock, converter."""
+    camera, fans, Orin, capture card, battery dock, converter."""
     e = rig.desc.enclosure
     j = _Joints(rig, c, fits)
     wall, fo = fits.wall, case.outer.lo[2]
@@ -215,6 +215,14 @@ def place_joints(rig: Rig, c: Constants, fits: Fits, *, cameras: Cameras, coolin
         p = compute.orin_pose.apply(np.array(pt))
         j.tapped(f"orin_{k}", e.screw, case_thread, (p[0], p[1], fo), UP, wall + compute.standoff_h,
                  ["case_lower", f"orin_standoff_{k}"], orin.part_id, orin.mount_depth_mm)
+    # capture card: down through each corner hole of its board into the female thread of its standoff
+    # (the standoffs' studs are screwed into the devkit's top first: assembly nodes, not joints)
+    card, so = compute.card, compute.card_standoff
+    card_screw = fastener_table().standoff(card.thread).screw
+    for k, pt in enumerate(card.mount_points()):
+        p = compute.card_pose.apply(np.array(pt))
+        j.tapped(f"card_{k}", card_screw, card.thread, (p[0], p[1], p[2] + card.board_mm), DOWN, card.board_mm, [],
+                 f"card_standoff_{k}", so.female_depth_mm)
     # battery dock: from inside the case, through the floor and the battery mount, into the adapter
     bm = power.battery_mount
     ax, ay, _ = power.adapter.size

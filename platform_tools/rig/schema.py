@@ -52,6 +52,7 @@ class PartKind(enum.Enum):
     FUSE = "fuse"
     SCREW = "screw"
     INSERT = "insert"
+    STANDOFF = "standoff"                 # a hex spacer with a thread at each end (cad/bought/fasteners.yaml)
     GLAND = "gland"                       # a cable pass-through with strain relief
     CUTOFF = "cutoff"                     # an under-voltage disconnect
     INTERFACE_BOARD = "interface_board"   # a board that brings a camera's signals out to connectors
