@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cad.bought.fasteners import Screw
+from cad.bought.fasteners import Screw, Standoff
 from platform_tools.rig.problems import InputProblems
 
 from .catalogue import LoadedCatalogue
@@ -289,7 +289,7 @@ def _placed_line(rig, cat: LoadedCatalogue, key: str, nodes: list, made: list[Pr
     packs = math.ceil(qty / e.pack_size)
     fastener = n.spec if n.category == "fastener" else None
     thread = fastener.thread if fastener is not None else None
-    length = fastener.length_mm if isinstance(fastener, Screw) else None
+    length = fastener.length_mm if isinstance(fastener, (Screw, Standoff)) else None
     fmt = dict(thread=thread or "", length_mm=f"{length:g}" if length is not None else "")
     if n.category == "machined":
         mp = next(p for p in made if p.part_id == n.part_id)
