@@ -9,7 +9,9 @@ they cross and the part beside them), not by the layout code that placed them:
 - ``orin_intake``: the devkit's own fan draws from its top face (an estimate,
   ``parts.jetson_agx_orin.dims``) through the roof slots over it, then round the capture card's
   edges into the gap between card and devkit; need: ``min_area_ratio`` x the fan's free ring,
-  pi/4 (D^2 - hub^2), and a clear height over the fan of ``inlet_gap_ratio`` x D;
+  pi/4 (D^2 - hub^2), and a clear height over the fan of ``inlet_gap_ratio`` x D (the card's
+  standoffs and their screws excepted: what stands in the gap round the fan is measured by its own
+  rule, the side area it hides, ``cad/inlet_gap.py``);
 - ``orin_exhaust``: its heat sink blows out of its +-y faces, through the side wall slots (tray and
   lid) beside it; same need as the intake.
 
@@ -31,6 +33,7 @@ from pathlib import Path
 import cadquery as cq
 import numpy as np
 
+from . import inlet_gap
 from .geom import Bounds, bounds_of, box, cylinder
 
 #: the B-rep section is a slab this thin at the wall's mid-plane (its volume / thickness = its area)
@@ -102,6 +105,7 @@ class AirflowReport:
     problems: list[str] = field(default_factory=list)
     details: list[str] = field(default_factory=list)
     data: dict = field(default_factory=dict)
+    side: "inlet_gap.GapReading | None" = None    # what stands in the gap round the fan (cad/inlet_gap.py)
 
 
 # ----------------------------------------------------------------------------- the paths
@@ -283,7 +287,11 @@ def airflow_report(asm, paths: list[AirPath] | None = None) -> AirflowReport:
     ob = bounds_of(orin.shape(asm.cache))
     centre = (ob.centre[0], ob.centre[1])
     height = lay.case.outer.hi[2] + 50.0 - ob.hi[2]
-    others = {n.name: n.shape(asm.cache) for n in asm.nodes if n.name != ORIN_NODE}
+    fix = inlet_gap.fixings(asm)
+    others = {n.name: n.shape(asm.cache) for n in asm.nodes if n.name != ORIN_NODE and n.name not in fix}
+    gap = inlet_gap.gap_of(asm)
+    in_gap = {n.name: n.shape(asm.cache) for n in asm.nodes if n.name not in (ORIN_NODE, inlet_gap.CARD_NODE)
+              and n.name not in CASE_NODES and bounds_of(n.shape(asm.cache)).overlaps(gap.slab())}
     gap_need = rig.desc.enclosure.vents.inlet_gap_ratio * cp.fan_diameter
     gap_brep, gap_by = brep_clear_height_mm(others, ob.hi[2], centre, cp.fan_diameter, height)
     readings = []
@@ -300,8 +308,11 @@ def airflow_report(asm, paths: list[AirPath] | None = None) -> AirflowReport:
             if bounds_of(s).overlaps(col):
                 tri = stl_triangles(s, Path(tmp) / f"gap_{k}.stl")
                 hits = np.minimum(hits, first_hits(tri, 2, pts, ob.hi[2] + 1e-3, ob.hi[2] + height))
+        gap_tri = [case_tri] + [stl_triangles(s, Path(tmp) / f"in_gap_{k}.stl") for k, s in enumerate(in_gap.values())]
+        side = inlet_gap.gap_reading(gap, inlet_gap.need_mm2(asm), {**dict(zip(CASE_NODES, case_shapes)), **in_gap},
+                                     np.concatenate(gap_tri))
     gap_stl = float(hits.min() - ob.hi[2]) if np.isfinite(hits).any() else height
-    r = AirflowReport(readings, gap_brep, gap_stl, gap_need, gap_by)
+    r = AirflowReport(readings, gap_brep, gap_stl, gap_need, gap_by, side=side)
     ratio = rig.desc.enclosure.vents.min_area_ratio
     for g in readings:
         p = g.path
@@ -322,6 +333,11 @@ def airflow_report(asm, paths: list[AirPath] | None = None) -> AirflowReport:
         r.problems.append(f"orin_intake: {gap_by or 'a part'} is {min(gap_brep, gap_stl):.1f} mm over the devkit's fan "
                           f"inlet, under {gap_need:.1f} mm = {rig.desc.enclosure.vents.inlet_gap_ratio:g} x its "
                           f"{cp.fan_diameter:g} mm diameter (enclosure.vents.inlet_gap_ratio): raise it")
+    r.details.append(f"orin_intake: {side.open_brep_mm2:.0f} mm^2 open (B-rep) / {side.open_stl_mm2:.0f} mm^2 (rays) of the "
+                     f"{side.gap.side_mm2:.0f} mm^2 round the devkit's fan under the card ({', '.join(side.by) or 'nothing'} "
+                     f"in the gap: {side.blocked_brep_mm2:.0f} / {side.blocked_stl_mm2:.0f} mm^2 hidden); need "
+                     f"{side.need_mm2:.0f} mm^2, its free ring")
+    r.problems += inlet_gap.gap_problems(side)
     if abs(gap_brep - gap_stl) > STL_TOLERANCE_MM + 1e-3:
         r.problems.append(f"orin_intake: the B-rep ({gap_brep:.2f} mm) and the STL ({gap_stl:.2f} mm) disagree on the "
                           f"clear height over the devkit's fan")
@@ -330,4 +346,7 @@ def airflow_report(asm, paths: list[AirPath] | None = None) -> AirflowReport:
               for g in readings}
     r.data["orin_inlet_gap"] = dict(brep_mm=round(gap_brep, 2), stl_mm=round(gap_stl, 2), need_mm=round(gap_need, 2),
                                     nearest=gap_by)
+    r.data["orin_inlet_side"] = dict(side_mm2=round(side.gap.side_mm2, 1), open_brep_mm2=round(side.open_brep_mm2, 1),
+                                     open_stl_mm2=round(side.open_stl_mm2, 1), need_mm2=round(side.need_mm2, 1),
+                                     in_gap=list(side.by))
     return r
