@@ -141,8 +141,24 @@ def test_power_and_sync_lines(bom_default):
     rows = read_bom(bom_default)
     lens = rows["boson_lens_4p9mm"]
     assert float(lens["cost"]) == 0 and "fitted to boson_640" in lens["price_note"]
-    for key in ("makita_charger", "wifi_pigtail", "fuse_holder_fixings", "capture_card_fixings", "power_splices"):
+    for key in ("makita_charger", "wifi_pigtail", "fuse_holder_fixings", "power_splices"):
         assert float(rows[key]["quantity"]) > 0, key
+
+
+def test_the_capture_card_fixings_are_counted_from_the_model(bom_default, rig):
+    """The kit line is gone: one standoff and one screw per hole of the card's board (the rig's holes),
+    each a line per length from the CAD assembly; the standoff 15 mm long, the gap the devkit's 60 mm fan
+    asks under the card (0.25 x 60, a stock length)."""
+    rows = read_bom(bom_default)
+    assert "capture_card_fixings" not in rows
+    holes = len(next(m for m in rig.part("zed_link_quad").mounting if m.face.value == "bottom").positions_mm)
+    standoffs = [k for k in rows if k.startswith("m2p5_standoff:")]
+    screws = [k for k in rows if k.startswith("m2p5_machine_screw:")]
+    assert len(standoffs) == 1 and len(screws) == 1, (standoffs, screws)
+    for key in standoffs + screws:
+        assert rows[key]["source"] == "CAD assembly" and float(rows[key]["quantity"]) == holes, key
+    assert standoffs[0] == "m2p5_standoff:M2.5x15"
+    assert "M2.5 x 15 mm" in rows[standoffs[0]]["name"] and "15mm" in rows[standoffs[0]]["link"]
     # the gland, the cut-off and the breakouts are counted from the CAD model, one breakout per Boson
     for key in ("undervoltage_cutoff", "cable_gland", "boson_sync_breakout"):
         assert rows[key]["source"] == "CAD assembly", key

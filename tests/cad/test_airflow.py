@@ -232,3 +232,103 @@ def test_a_hub_as_wide_as_the_fan_is_one_line_naming_the_key():
     assert [str(p) for p in ps] == ["parts.jetson_agx_orin.dims.fan_hub_diameter_mm: 70 mm, expected 0 to under "
                                     "fan_diameter_mm (60 mm): the fan would have no free ring"]
     assert not design_problems(load_rig(overrides=["parts.jetson_agx_orin.dims.fan_hub_diameter_mm.value=59.9"]))
+
+# ----------------------------------------------------------------------------- what stands in the gap round the fan
+def _gap(radius=30.0, height=15.0):
+    from cad.inlet_gap import Gap
+    return Gap((0.0, 0.0), radius, 0.0, height, Bounds((-80.0, -80.0, 0.0), (80.0, 80.0, height)))
+
+
+def _trimesh_post(x, y, radius, height, sections):
+    return trimesh.creation.cylinder(radius=radius, height=height, sections=sections,
+                                     transform=trimesh.transformations.translation_matrix((x, y, height / 2)))
+
+
+def test_a_round_post_hides_its_arc_on_both_readings():
+    """A 6 mm post 40 mm from the fan's axis hides 2 asin(3/40) of the turn over its 15 mm: on the
+    cylinder of R = 30 mm, 15 x 30 x 2 asin(3 / 40) = 67.5 mm^2 (the B-rep from OpenCascade's solid, the
+    rays from a mesh trimesh makes)."""
+    from cad.geom import cylinder
+    from cad.inlet_gap import brep_blocked_mm2, gap_reading, mesh_blocked_mm2
+    gap = _gap()
+    expect = 15.0 * 30.0 * 2 * math.asin(3.0 / 40.0)
+    brep, by = brep_blocked_mm2(gap, {"post": cylinder(6.0, 15.0, (40.0, 0.0, 0.0))})
+    assert by == ("post",) and brep == pytest.approx(expect, rel=5e-3)
+    rays = mesh_blocked_mm2(gap, _trimesh_post(40.0, 0.0, 3.0, 15.0, 128).triangles)
+    assert rays == pytest.approx(expect, abs=4.0)                 # one 0.5 deg cell at each edge of the arc
+    # a post beyond the card's footprint, or above the gap, hides nothing
+    far = gap_reading(gap, 100.0, {"far": cylinder(6.0, 15.0, (90.0, 0.0, 0.0)),
+                                   "above": cylinder(6.0, 5.0, (40.0, 0.0, 15.5))},
+                      np.concatenate([_trimesh_post(90.0, 0.0, 3.0, 15.0, 32).triangles]))
+    assert far.blocked_brep_mm2 == 0.0 and far.blocked_stl_mm2 == 0.0 and far.ok
+
+
+@pytest.mark.slow
+def test_posts_ringed_close_round_the_fan_fail_naming_them():
+    """Twelve 5.8 mm posts 34 mm out hide over half the side: the rule fails, naming them, on both readings."""
+    from cad.geom import cylinder
+    from cad.inlet_gap import gap_problems, gap_reading
+    gap = _gap()
+    pts = [(34 * math.cos(a), 34 * math.sin(a)) for a in np.arange(12) * math.pi / 6]
+    shapes = {f"post_{k}": cylinder(5.8, 15.0, (x, y, 0.0)) for k, (x, y) in enumerate(pts)}
+    tri = np.concatenate([_trimesh_post(x, y, 2.9, 15.0, 64).triangles for x, y in pts])
+    g = gap_reading(gap, math.pi / 4 * (60 ** 2 - 24 ** 2), shapes, tri)
+    expect = 12 * 15.0 * 30.0 * 2 * math.asin(2.9 / 34.0)
+    assert g.blocked_brep_mm2 == pytest.approx(expect, rel=5e-3) and g.blocked_stl_mm2 == pytest.approx(expect, rel=0.03)
+    assert not g.ok and g.agree
+    (line,) = gap_problems(g)
+    assert line.startswith("orin_intake: post_0, post_1") and "under its free ring 2375 mm^2" in line
+
+
+@pytest.mark.slow
+def test_the_card_s_standoffs_are_measured_in_the_gap_and_pass(results, asm):
+    """The real layout: the four standoffs stand in the gap (the clear height over the fan is still the
+    card's 15 mm), each hides between the arcs of its inscribed and circumscribed circles (across flats
+    and across corners, an independent bound from the rig's sizes), and the side left open passes."""
+    r = results["airflow"]
+    s = r.data["orin_inlet_side"]
+    names = {n.name for n in asm.nodes if n.props.get("kind") == "standoff"}
+    assert len(names) == 4 and names <= set(s["in_gap"])
+    assert r.data["orin_inlet_gap"]["nearest"] == "zed_link_quad"
+    so, cp = asm.layout.compute.card_standoff, asm.layout.compute
+    ob = cp.orin_box
+    R, h = cp.fan_diameter / 2, cp.card_box.lo[2] - ob.hi[2]
+    lo = hi = 0.0
+    for p in cp.card_standoff_poses:
+        d = math.hypot(p.t[0] - ob.centre[0], p.t[1] - ob.centre[1])
+        lo += h * R * 2 * math.asin(so.across_flats_mm / 2 / d)
+        hi += h * R * 2 * math.asin(so.across_corners_mm / 2 / d)
+    for key in ("open_brep_mm2", "open_stl_mm2"):
+        blocked = s["side_mm2"] - s[key]
+        assert lo - 4 * 2.0 <= blocked <= hi + 4 * 2.0, (key, blocked, lo, hi)
+        assert s[key] >= s["need_mm2"], (key, s)
+    assert s["side_mm2"] == pytest.approx(2 * math.pi * R * h, abs=0.05)      # the data rounds to 0.1 mm^2
+
+
+@pytest.mark.slow
+def test_the_standoffs_moved_round_the_fan_s_axis_fail_the_intake_not_its_clear_height(asm):
+    """The card's four standoffs moved 8 mm round the fan's axis (on its disc, under the card): the clear
+    height over the fan ignores them (still the card's 15 mm), the gap's side rule fails naming them."""
+    from cad import checks
+    from cad.assembly import Assembly
+    from platform_tools.rig.frames import Pose
+    c = asm.layout.compute.orin_box.centre
+    ring = iter([(8, 0), (0, 8), (-8, 0), (0, -8)])
+    moved_ = {}
+    nodes = []
+    for n in asm.nodes:
+        if n.props.get("kind") == "standoff":
+            dx, dy = next(ring)
+            moved_[n.name] = (c[0] + dx, c[1] + dy)
+            n = dataclasses.replace(n, pose=Pose(n.pose.R, (c[0] + dx, c[1] + dy, n.pose.t[2])), _shape=None)
+        elif n.props.get("host", "").startswith("card_standoff_") and n.category == "fastener":
+            continue                                              # their screws stay in the card's holes: leave them out
+        nodes.append(n)
+    r = checks.check_airflow(Assembly(asm.rig, asm.layout, nodes, asm.cache))
+    assert not r.ok
+    bad = [d for d in r.details if "under the card hide" in d]
+    assert len(bad) == 1 and all(name in bad[0] for name in moved_), r.details
+    assert r.data["orin_inlet_gap"]["brep_mm"] == pytest.approx(15.0, abs=1e-3)
+    assert r.data["orin_inlet_gap"]["nearest"] == "zed_link_quad"
+    s = r.data["orin_inlet_side"]
+    assert s["open_brep_mm2"] < s["need_mm2"] and s["open_stl_mm2"] < s["need_mm2"]

@@ -5,11 +5,15 @@ from cad.bought.fasteners import fastener_table
 
 def test_every_joint_places_its_fasteners(asm):
     joints = asm.layout.joints
-    screws = [n for n in asm.nodes if n.category == "fastener" and n.part_id != "m3_insert"]
+    standoffs = [n for n in asm.nodes if n.props.get("kind") == "standoff"]
+    screws = [n for n in asm.nodes if n.category == "fastener" and n.part_id != "m3_insert" and n not in standoffs]
     inserts = asm.by_part("m3_insert")
     assert len(screws) == len(joints)
     assert len(inserts) == sum(j.kind == "insert" for j in joints)
     assert all(n.props["length_mm"] in fastener_table().stock_lengths_mm for n in screws)
+    # the capture card's standoffs: one per screw driven into one, each a stock standoff length
+    assert len(standoffs) == sum(j.host in {n.name for n in standoffs} for j in joints) == 4
+    assert all(n.props["length_mm"] in fastener_table().standoff(n.props["thread"]).stock_lengths_mm for n in standoffs)
 
 
 def test_tree_counts_and_placements(asm):
