@@ -34,7 +34,7 @@ import cadquery as cq
 import numpy as np
 
 from . import inlet_gap
-from .geom import Bounds, bounds_of, box, cylinder
+from .geom import Bounds, bounds_of, box, common_volume_mm3, cylinder
 
 #: the B-rep section is a slab this thin at the wall's mid-plane (its volume / thickness = its area)
 SECTION_MM = 0.02
@@ -176,8 +176,7 @@ def brep_free_area_mm2(case_shapes: list[cq.Shape], windows: tuple[Window, ...])
     material = 0.0
     for s in case_shapes:
         if bounds_of(s).overlaps(tb):
-            c = s.intersect(tool)
-            material += (c.Volume() if c.Solids() else 0.0) / SECTION_MM
+            material += common_volume_mm3(s, tool) / SECTION_MM
     return sum(w.area_mm2 for w in windows) - material
 
 

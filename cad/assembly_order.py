@@ -20,7 +20,7 @@ import numpy as np
 import yaml
 
 from cad.bought.fasteners import Driver, fastener_table
-from cad.geom import bounds_of, cylinder
+from cad.geom import TOUCH_MM3, bounds_of, cylinder
 
 from .assembly import Assembly
 
@@ -29,8 +29,6 @@ STEPS = Path(__file__).resolve().parents[1] / "docs" / "assembly" / "steps.yaml"
 #: the driver's envelope starts this far out from the head's top face, so the bit seated in the socket
 #: does not count as touching its own screw's head
 SEAT_GAP_MM = 0.05
-#: an overlap under this is a touch of faces, not a part in the way (the interference check's threshold)
-TOUCH_MM3 = 0.01
 
 
 @dataclass(frozen=True)

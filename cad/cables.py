@@ -28,12 +28,10 @@ import cadquery as cq
 import numpy as np
 
 from cad.bought.cables import CableKind, PlugEnvelope, cable_table
-from cad.geom import Bounds, Vec3, bounds_of, placed_bounds
+from cad.geom import TOUCH_MM3, Bounds, Vec3, bounds_of, common_volume_mm3, placed_bounds
 
 from .assembly import Assembly
 
-#: an overlap below this is a touch (the interference check's threshold)
-CONTACT_MM3 = 0.01
 #: a turn under this (deg) is a straight run: no bend
 STRAIGHT_DEG = 0.5
 #: the capture card's connectors on its front face (+x), across it (y, from its centre): the GMSL2 socket
@@ -420,9 +418,8 @@ def _hits(solid: cq.Shape, shapes: list[tuple[str, cq.Shape]], boxes: dict[str, 
     for name, s in shapes:
         if not sb.overlaps(boxes[name], 1e-6):
             continue
-        c = solid.intersect(s)
-        v = c.Volume() if c.Solids() else 0.0
-        if v > CONTACT_MM3:
+        v = common_volume_mm3(solid, s)
+        if v > TOUCH_MM3:
             hits.append(f"{name} ({v:.1f} mm^3)")
     return hits
 
@@ -440,9 +437,8 @@ def _cable_clashes(swept: list[tuple[str, str, cq.Shape]]) -> list[str]:
             (a, ra, sa), (b, rb, sb) = swept[i], swept[j]
             if ra == rb or not bbs[i].overlaps(bbs[j], 1e-6):
                 continue
-            c = sa.intersect(sb)
-            v = c.Volume() if c.Solids() else 0.0
-            if v > CONTACT_MM3:
+            v = common_volume_mm3(sa, sb)
+            if v > TOUCH_MM3:
                 out.append(f"{a} and {b} overlap ({v:.1f} mm^3): one of them must move")
     return out
 

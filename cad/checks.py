@@ -19,11 +19,10 @@ from platform_tools.rig.progress import progress
 
 from .assembly import PRINT_SETUPS, Assembly, Node
 from .layout import fov_half_angles_deg
-from .geom import Bounds, bounds_of, box
+from .geom import TOUCH_MM3, Bounds, bounds_of, box, common_volume_mm3
 from .parts.common import on_bed
 from cad.bought.fasteners import fastener_table
 
-CONTACT_MM3 = 0.01       # an overlap below this is a touch, not a clash
 TOL_REL, TOL_ABS = 0.05, 0.5
 DATUM_CONTACT_MM = 0.02  # a datum contact further than this from its part's surface is not in the geometry
 
@@ -84,8 +83,7 @@ def check_interference(asm: Assembly) -> CheckResult:
     clashes, allowed, seen = [], [], set()
     for a, b in progress(pairs, desc="interference"):
         key = frozenset((a.name, b.name))
-        common = a.shape(asm.cache).intersect(b.shape(asm.cache))
-        v = common.Volume() if common.Solids() else 0.0
+        v = common_volume_mm3(a.shape(asm.cache), b.shape(asm.cache))
         if key in intended:
             exp, why = intended[key]
             seen.add(key)
@@ -93,7 +91,7 @@ def check_interference(asm: Assembly) -> CheckResult:
             allowed.append(f"{a.name} / {b.name}: {v:.2f} mm^3 (intended {exp:.2f}: {why})" + ("" if ok else "  <-- MISMATCH"))
             if not ok:
                 clashes.append(f"{a.name} / {b.name}: intended overlap measures {v:.2f} mm^3, expected {exp:.2f} ({why})")
-        elif v > CONTACT_MM3:
+        elif v > TOUCH_MM3:
             clashes.append(f"{a.name} ({a.part_id}) / {b.name} ({b.part_id}): {v:.2f} mm^3 overlap")
     missing = [f"{'/'.join(sorted(k))}: intended overlap not found (the parts do not meet)" for k in intended
                if k not in seen and intended[k][0] > 0]
@@ -218,9 +216,8 @@ def check_fov(asm: Assembly, extra: list[tuple[str, cq.Shape]] = ()) -> CheckRes
         for name, s in items:
             if not bounds_of(s).overlaps(fb):
                 continue
-            c = s.intersect(fr)
-            v = c.Volume() if c.Solids() else 0.0
-            if v > CONTACT_MM3:
+            v = common_volume_mm3(s, fr)
+            if v > TOUCH_MM3:
                 hits.append(f"{name} ({v:.1f} mm^3)")
         details.append(f"{cam}: " + (", ".join(hits) if hits else "clear"))
         if hits:
@@ -246,9 +243,8 @@ def check_battery(asm: Assembly, extra: list[tuple[str, cq.Shape]] = ()) -> Chec
     for name, s in items + list(extra):
         if not bounds_of(s).overlaps(bounds_of(sweep)):
             continue
-        c = s.intersect(sweep)
-        v = c.Volume() if c.Solids() else 0.0
-        if v > CONTACT_MM3:
+        v = common_volume_mm3(s, sweep)
+        if v > TOUCH_MM3:
             hits.append(f"{name} ({v:.1f} mm^3)")
     return CheckResult("battery slides out", not hits,
                        f"the battery's {travel:.0f} mm path along {tuple(d)} is clear" if not hits else
@@ -260,8 +256,7 @@ def check_vents(asm: Assembly) -> CheckResult:
     shell = box(lay.case.outer).cut(box(lay.case.interior))
     area = 0.0
     for v in lay.case.vents:
-        c = shell.intersect(box(v))
-        area += (c.Volume() if c.Solids() else 0.0) / lay.fits.wall
+        area += common_volume_mm3(shell, box(v)) / lay.fits.wall
     fans = 2 * lay.cooling.part.inlet_area_mm2
     ratio = lay.rig.desc.enclosure.vents.min_area_ratio
     ok = area >= fans * ratio

@@ -109,6 +109,16 @@ def moved(shape: cq.Shape, pose: Pose) -> cq.Shape:
     return shape.moved(location(pose))
 
 
+#: an overlap of two solids below this is a touch (faces that meet), not a clash (mm^3)
+TOUCH_MM3 = 0.01
+
+
+def common_volume_mm3(a: cq.Shape, b: cq.Shape) -> float:
+    """The volume two shapes share (mm^3): their intersection's, 0 when it holds no solid."""
+    c = a.intersect(b)
+    return c.Volume() if c.Solids() else 0.0
+
+
 def bounds_of(shape: cq.Shape, pose: Pose | None = None) -> Bounds:
     """The tight box of a shape (exact surfaces, not their triangulation)."""
     from OCP.Bnd import Bnd_Box

@@ -18,10 +18,10 @@ from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
 import cadquery as cq
 
-from cad.geom import Bounds, bounds_of, box, cylinder, moved
+from cad.geom import TOUCH_MM3, Bounds, bounds_of, box, common_volume_mm3, cylinder, moved
 
 from .assembly import Assembly
-from .assembly_order import TOUCH_MM3, load_steps
+from .assembly_order import load_steps
 
 #: a deep socket's wall around the nut it fits (a 15 mm socket is about 21 mm across: estimate)
 SOCKET_WALL_MM = 2.5
@@ -73,8 +73,7 @@ def _hits(env: cq.Shape, names, shapes: dict[str, cq.Shape]) -> list[str]:
         s = shapes[name]
         if not eb.overlaps(bounds_of(s), 1e-6):
             continue
-        c = env.intersect(s)
-        v = c.Volume() if c.Solids() else 0.0
+        v = common_volume_mm3(env, s)
         if v > TOUCH_MM3:
             out.append(f"{name} ({v:.1f} mm^3)")
     return out

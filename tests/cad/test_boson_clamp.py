@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
-from cad import checks
+from cad import checks, geom
 from cad.assembly import assembly_tree
 from cad.assembly_order import driver_paths, load_steps
 from cad.bought.fasteners import fastener_table
@@ -76,7 +76,7 @@ def test_the_plate_and_its_screws_clash_with_nothing_and_engage_their_threads(as
                 hosts.add(other.name)
                 assert abs(v - intended[key][0]) <= 0.05 * intended[key][0], (name, other.name, v, intended[key])
             else:
-                assert v <= checks.CONTACT_MM3, (name, other.name, v)
+                assert v <= geom.TOUCH_MM3, (name, other.name, v)
     assert hosts == {f"{p}_{s}" for p in ("boson", "heat_sink") for s in SIDES}
 
 
