@@ -81,12 +81,13 @@ class Pool:
 
         from .workers import stop
         mine = [p for p in multiprocessing.active_children() if p not in self._before]
-        self._pool.shutdown(wait=False, cancel_futures=True)
-        stop(mine)
         # The executor's manager thread sees its workers gone and closes its wake-up pipe. Left running, it races
         # concurrent.futures' exit hook, which writes to that pipe unlocked: "Exception ignored ... OSError: [Errno
-        # 9] Bad file descriptor" after the one-line interrupt message (seen once in about ten Ctrl-C tests).
+        # 9] Bad file descriptor" after the one-line interrupt message (seen once in about ten Ctrl-C tests). It is
+        # taken before shutdown(wait=False), which drops the executor's reference to it.
         manager = getattr(self._pool, "_executor_manager_thread", None)
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        stop(mine)
         if manager is not None:
             manager.join(MANAGER_JOIN_S)
 

@@ -100,3 +100,31 @@ def test_the_warm_up_loads_the_specialisations_a_real_export_uses(sim, tmp_path)
     warm, after = json.loads(r.stdout.strip().splitlines()[-1])
     assert all(len(v) == 1 for v in warm.values()), warm
     assert after == warm
+
+
+def _sleep(s: float) -> float:
+    time.sleep(s)
+    return s
+
+
+def test_an_aborted_pool_leaves_nothing_for_the_exit_hook_to_write_to(monkeypatch):
+    """After close(abort=True) the executor's manager thread has ended and its wake-up pipe is closed, so
+    concurrent.futures' exit hook (which writes to that pipe without a lock) has nothing to race: before, the thread
+    was still closing the pipe as the interpreter exited and about one Ctrl-C in ten printed 'Exception ignored ...
+    OSError: [Errno 9] Bad file descriptor' after the one-line message. The manager thread is made slow to close
+    (as on a loaded machine), so that a close() which does not wait for it fails here every time."""
+    from concurrent.futures import process
+    slow_close = process._ExecutorManagerThread.join_executor_internals
+
+    def slowly(self):
+        time.sleep(1.0)
+        slow_close(self)
+    monkeypatch.setattr(process._ExecutorManagerThread, "join_executor_internals", slowly)
+    pool = engines.Pool(2)
+    manager = pool._pool._executor_manager_thread
+    wakeup = process._threads_wakeups[manager]
+    busy = [pool._pool.submit(_sleep, 30.0) for _ in range(2)]      # both workers in a task, as when Ctrl-C lands
+    time.sleep(0.5)
+    pool.close(abort=True)
+    assert not manager.is_alive() and wakeup._closed
+    assert all(f.done() for f in busy)                               # their tasks abandoned, not waited for
