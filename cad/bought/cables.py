@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Annotated, Literal, Mapping
 
 from platform_tools.rig.problems import InputProblems
+from platform_tools.rig.schema import Confidence
 from platform_tools.rig.typed import Ge, Gt
 from platform_tools.rig.yamlsource import load_typed
 
@@ -29,7 +30,7 @@ class CableKind:
     stock_lengths_mm: tuple[float, ...]
     service_slack_mm: Annotated[float, Ge(0)]
     source: str
-    confidence: Literal["datasheet", "measured", "second_hand", "estimate"]
+    confidence: Confidence
 
     @property
     def min_bend_radius_mm(self) -> float:
@@ -58,7 +59,7 @@ class PlugEnvelope:
     height_mm: Annotated[float, Gt(0)]
     exit_depth_mm: Annotated[float, Gt(0)]
     source: str
-    confidence: Literal["datasheet", "measured", "second_hand", "estimate"]
+    confidence: Confidence
 
 
 @dataclass(frozen=True)
