@@ -2,21 +2,32 @@
 
 Every problem is one line naming the file, the line and the entry, as the rig loader does:
 ``bom/parts.yaml:42: parts.zed_x.price.currency: got 'US$' ...``.
+
+Besides prices and quantities it checks what is to be ordered (:func:`_purchase_rules`): a shop search is
+no product, so only an entry marked ``generic`` (no MPN verified) may link to one; a "generic" vendor
+needs a maker part or that mark; a maker part says where its MPN was read; and a part's ratings, copied
+from that page, are at least what config/rig.yaml assumes of it (:func:`_rating_rules`).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
+from typing import Iterator, Mapping
+from urllib.parse import parse_qs, urlsplit
 
 from platform_tools.rig.problems import InputProblems
 from platform_tools.rig import Rig
 from platform_tools.rig.typed import Problem, closest, convert
 from platform_tools.rig.yamlsource import YamlSource, load_typed
 
-from .catalogue_schema import Catalogue, CatalogueEntry
+from .catalogue_schema import Catalogue, CatalogueEntry, MakerPart
 
 DEFAULT_CATALOGUE = Path(__file__).resolve().parent / "parts.yaml"
+#: query keys that make a link a shop's search results rather than a product page (amazon ?k=,
+#: McMaster-Carr ?s=, WAGO ?text=, the common ?q=)
+SEARCH_KEYS = frozenset({"k", "q", "s", "text", "search", "keyword", "keywords", "query"})
+#: how an unverified MPN's source must begin, so that no reader takes it for a page that was read
+UNVERIFIED = "not verified here"
 
 
 class CatalogueError(InputProblems):
@@ -50,8 +61,21 @@ class LoadedCatalogue:
 
 def load_catalogue(rig: Rig, path: Path | str | None = None) -> LoadedCatalogue:
     path = Path(path) if path is not None else DEFAULT_CATALOGUE
-    typed = load_typed(path, Catalogue, CatalogueError, rules=lambda cat: _rules(cat, rig))
+    typed = load_typed(path, Catalogue, CatalogueError,
+                       rules=lambda cat: [*_rules(cat, rig), *_purchase_rules(cat, rig)])
     return LoadedCatalogue(typed.value, typed.source)
+
+
+def read_entries(path: Path | str) -> Mapping[str, CatalogueEntry]:
+    """The entries of a catalogue already checked against its rig (the BOM's own), by id: what the
+    outputs show of each line's maker part."""
+    return load_typed(path, Catalogue, CatalogueError).value.parts
+
+
+def is_search_link(link: str) -> bool:
+    """True when ``link`` is a shop's search results (a query such as ``?k=`` or a ``/search`` path)."""
+    parts = urlsplit(link)
+    return bool(SEARCH_KEYS & set(parse_qs(parts.query))) or "/search" in parts.path.lower()
 
 
 def _rules(cat: Catalogue, rig: Rig) -> Iterator[Problem]:
@@ -150,3 +174,73 @@ def _supply_rules(e: CatalogueEntry, path: tuple, rig: Rig) -> Iterator[Problem]
     if material.lower() not in (s.part_number + " " + s.description).lower():
         yield Problem(sp + ("part_number",), f"is {s.part_number!r}, but the rig prints in {material} "
                                              "(printing.printer.material)")
+
+
+def _vendor(e: CatalogueEntry, pid: str, rig: Rig) -> str | None:
+    """Who the rig description (or the supply) says makes the part."""
+    if e.supply is not None:
+        return e.supply.vendor
+    return rig.desc.parts[pid].vendor if pid in rig.desc.parts else None
+
+
+def _purchase_rules(cat: Catalogue, rig: Rig) -> Iterator[Problem]:
+    """What is to be ordered is a product: a maker part with its evidence, or an entry marked generic."""
+    for pid, e in cat.parts.items():
+        path = ("parts", pid)
+        if e.part is not None and e.generic is not None:
+            yield Problem(path + ("generic",), "is given with part; an entry is a maker part or generic, not both")
+        if is_search_link(e.link) and e.generic is None:
+            yield Problem(path + ("link",), f"is a shop search ({e.link}), not a product page; link the maker "
+                                            "part's product page, or mark the entry generic: <why no MPN was "
+                                            "verified>")
+        vendor = _vendor(e, pid, rig)
+        if (e.made is None and e.included_with is None and vendor is not None and vendor.lower() == "generic"
+                and e.part is None and e.generic is None):
+            yield Problem(path, "has vendor generic and no maker part; add part: {maker, mpn, source, verified} "
+                                "or generic: <why no MPN was verified>")
+        if e.part is not None:
+            yield from _evidence_rules(e.part, path + ("part",))
+            if e.part.ratings is not None and pid in rig.desc.parts:
+                yield from _rating_rules(e.part, pid, rig, path + ("part", "ratings"))
+
+
+def _evidence_rules(part: MakerPart, path: tuple) -> Iterator[Problem]:
+    """A verified MPN names the page it was read on; an unverified one says so; ratings need a page."""
+    if part.verified and not part.source.startswith(("https://", "http://")):
+        yield Problem(path + ("source",), f"is {part.source!r}; verified: true needs the address of the page the "
+                                          "MPN was read on")
+    if not part.verified and not part.source.lower().startswith(UNVERIFIED):
+        yield Problem(path + ("source",), f"is {part.source!r}; an MPN not verified here needs a source starting "
+                                          f"{UNVERIFIED!r}, then what the MPN rests on")
+    if not part.verified and part.ratings is not None:
+        yield Problem(path + ("ratings",), "are given for an MPN not verified here; ratings are copied from the "
+                                           "page in source (verified: true), or left out")
+
+
+def _rating_rules(part: MakerPart, pid: str, rig: Rig, path: tuple) -> Iterator[Problem]:
+    """The part's datasheet ratings against what config/rig.yaml assumes of it (cad/electrical.py's checks
+    use those) and against the battery it hangs on."""
+    from cad.bought.base import part_of_kind
+    r, mine = part.ratings, rig.part(pid)
+    bat_id = part_of_kind(rig, "battery")
+    bat = rig.part(bat_id)
+    low_v = bat.cutoff_v.value if bat.cutoff_v is not None else bat.output_v.min
+    if r.dc_current_a is not None and mine.rating_a is not None and r.dc_current_a < mine.rating_a.value:
+        yield Problem(path + ("dc_current_a",), f"{part.mpn} is rated {r.dc_current_a:g} A; config/rig.yaml assumes "
+                                                f"{mine.rating_a.value:g} A (parts.{pid}.rating_a, checked by "
+                                                "cad/electrical.py)")
+    if r.dc_voltage_v is not None:
+        need, why = max((bat.output_v.max, f"the battery's full {bat.output_v.max:g} V (parts.{bat_id}.output_v.max)"),
+                        (mine.rating_dc_v.value if mine.rating_dc_v else 0.0, f"parts.{pid}.rating_dc_v"))
+        if r.dc_voltage_v < need:
+            yield Problem(path + ("dc_voltage_v",), f"{part.mpn} is rated to {r.dc_voltage_v:g} V DC; it must "
+                                                    f"stand {need:g} V ({why})")
+    if r.input_v is not None and not r.input_v.min <= low_v <= bat.output_v.max <= r.input_v.max:
+        yield Problem(path + ("input_v",), f"{part.mpn} works from {r.input_v.min:g} to {r.input_v.max:g} V; the "
+                                           f"battery gives {low_v:g} V (cut-off) to {bat.output_v.max:g} V "
+                                           f"(parts.{bat_id})")
+    for key, want in (("output_v", mine.output_v), ("supply_v", mine.supply_v)):
+        got = getattr(r, key)
+        if got is not None and want is not None and not got.min <= want.min <= want.max <= got.max:
+            yield Problem(path + (key,), f"{part.mpn} is rated {got.min:g}-{got.max:g} V; config/rig.yaml assumes "
+                                         f"{want.min:g}-{want.max:g} V (parts.{pid}.{key})")

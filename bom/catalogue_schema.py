@@ -18,6 +18,11 @@ Three kinds of entry:
   volumes (plus ``waste_percent`` for purge, brims and failed prints).
 
 ``price.amount`` is the price of one pack of ``pack_size`` units; the BOM buys whole packs.
+
+What to order: an entry names either the manufacturer part to buy (``part``: maker, MPN, the page the
+MPN was read on, and the ratings copied from that page) or says why none could be verified
+(``generic``); an entry whose vendor is "generic" must do one or the other, and only a generic entry may
+link to a shop search (catalogue._purchase_rules).
 """
 from __future__ import annotations
 
@@ -25,11 +30,14 @@ import enum
 from dataclasses import dataclass
 from typing import Annotated, Literal, Mapping, Optional
 
-from platform_tools.rig.typed import Ge, Gt
+from platform_tools.rig.schema import VoltageRange
+from platform_tools.rig.typed import Ge, Gt, Unit
 
 #: ISO 4217 codes the catalogue accepts; a price in another currency is refused by name
 Currency = Literal["USD", "EUR", "GBP", "CHF", "CAD", "AUD", "JPY", "CNY"]
 IsoDate = Annotated[str, "YYYY-MM-DD"]
+Amp = Annotated[float, Unit("A"), Gt(0)]
+Volt = Annotated[float, Unit("V"), Gt(0)]
 
 
 class Category(enum.Enum):
@@ -86,6 +94,38 @@ class Supply:
 
 
 @dataclass(frozen=True)
+class Ratings:
+    """A chosen part's ratings, every one copied from its ``MakerPart.source`` (the page they were read
+    on). cad/electrical.py sizes the rig from the values config/rig.yaml assumes; the catalogue checks
+    that the part bought is rated at least that (catalogue._rating_rules)."""
+    #: contact or holder current at ``dc_voltage_v`` (switch, fuse holder, cut-off), or a converter's output
+    dc_current_a: Optional[Amp] = None
+    #: the highest DC voltage ``dc_current_a`` is rated at
+    dc_voltage_v: Optional[Volt] = None
+    #: the working input range of a part fed from the battery (converter, cut-off)
+    input_v: Optional[VoltageRange] = None
+    #: a converter's output (a fixed voltage is min = max)
+    output_v: Optional[VoltageRange] = None
+    #: the supply range of a load (a fan's motor, a button's LED)
+    supply_v: Optional[VoltageRange] = None
+
+
+@dataclass(frozen=True)
+class MakerPart:
+    """The manufacturer part to order, and the evidence for it."""
+    maker: str
+    mpn: str
+    #: the address of the stored page the MPN and ratings were read on (verified: true), or text starting
+    #: "not verified here" that says what the MPN rests on instead (verified: false)
+    source: str
+    #: True only when the MPN and every rating were read on ``source``
+    verified: bool
+    ratings: Optional[Ratings] = None
+    #: what to check before ordering (an option code, a size the CAD model does not have yet)
+    note: Optional[str] = None
+
+
+@dataclass(frozen=True)
 class CatalogueEntry:
     category: Category
     supplier: str
@@ -101,6 +141,11 @@ class CatalogueEntry:
     supply: Optional[Supply] = None
     #: a part the CAD model places that is made to order from its geometry (the copper heat sink)
     made: Optional[Literal["machined"]] = None
+    #: the manufacturer part to order (maker, MPN, where they were read)
+    part: Optional[MakerPart] = None
+    #: why no MPN is given (the BOM shows "generic: no MPN verified" and this reason); only such an entry may
+    #: link to a shop search, which the BOM then shows as a search, not as a product
+    generic: Optional[str] = None
 
 
 @dataclass(frozen=True)

@@ -1,15 +1,24 @@
 """Write the BOM (csv, md, html); its jinja2 environment and page base are shared with the assembly guide
-(docs.guide), which adds its own templates folder."""
+(docs.guide), which adds its own templates folder.
+
+Every line says what to order and how far to trust it (:class:`Order`): the maker part with the page its
+MPN was read on, an MPN not verified here, a generic part with the reason no MPN was verified (its shop
+search shown as a search), a part named by its vendor (as the rig description writes it), or a part made from the CAD model.
+"""
 from __future__ import annotations
 
 import csv
 import io
 import re
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Mapping
 
 import jinja2
 
-from .bom import Bom
+from .bom import Bom, Line
+from .catalogue import is_search_link, read_entries
+from .catalogue_schema import CatalogueEntry
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 
@@ -42,33 +51,95 @@ def _short(path: str) -> str:
         return str(p)
 
 
+#: how far to trust what a line says to order, best first
+VERIFIED = "MPN verified"                 # maker part number read on the page in ``source``
+UNVERIFIED = "MPN not verified"           # a maker part number, its page not read here
+GENERIC = "generic: no MPN verified"      # a description only; ``source`` says why
+NAMED = "named by its vendor, not verified here"   # vendor and part number as config/rig.yaml or a supply writes them
+MADE = "made from the CAD model"          # printed or machined
+
+
+@dataclass(frozen=True)
+class Order:
+    """What one BOM line says to order, and the evidence for it."""
+    maker: str
+    mpn: str
+    status: str       # one of VERIFIED, UNVERIFIED, GENERIC, NAMED, MADE
+    source: str       # the page the MPN was read on, what an unverified MPN rests on, or why a line is generic
+    note: str         # what to check before ordering
+    search: bool      # the line's link is a shop search (a generic line only)
+    link_read: bool   # the link is the page read for the MPN (as a stored copy); no other link was opened
+
+
+def order_of(line: Line, entry: CatalogueEntry | None) -> Order:
+    """The :class:`Order` of ``line`` from its catalogue ``entry``."""
+    search = is_search_link(line.link) if line.link.startswith(("https://", "http://")) else False
+    if entry is None or line.vendor == "printed" or entry.made is not None:
+        return Order(line.vendor, line.part_number, MADE, "", "", False, False)
+    if entry.part is not None:
+        p = entry.part
+        return Order(p.maker, p.mpn, VERIFIED if p.verified else UNVERIFIED, p.source, p.note or "", search,
+                     p.verified and line.link == p.source)
+    if entry.generic is not None:
+        return Order("generic", line.part_number, GENERIC, entry.generic, "", search, False)
+    return Order(line.vendor, line.part_number, NAMED, "", "", search, False)
+
+
+def orders(bom: Bom) -> dict[str, Order]:
+    """Every line's :class:`Order`, by line key (the catalogue is the one the bill was joined with)."""
+    entries: Mapping[str, CatalogueEntry] = read_entries(bom.catalogue_path)
+    return {ln.key: order_of(ln, entries.get(ln.entry_id)) for ln in bom.lines}
+
+
 CSV_FIELDS = ["category", "key", "name", "vendor", "part_number", "supplier", "link", "quantity", "unit", "pack_size",
               "packs", "pack_price", "cost", "currency", "unit_mass_g", "mass_g", "mass_source", "price_note",
-              "source", "nodes"]
+              "source", "nodes", "maker", "mpn", "mpn_status", "mpn_source", "order_note", "link_kind"]
 
 
-def bom_csv(bom: Bom) -> str:
+def bom_csv(bom: Bom, by_key: Mapping[str, Order] | None = None) -> str:
+    by_key = orders(bom) if by_key is None else by_key
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(CSV_FIELDS)
     for ln in bom.lines:
+        o = by_key[ln.key]
         row = dict(vars(ln), currency=bom.currency, nodes=" ".join(ln.nodes),
                    pack_price=f"{ln.pack_price:.2f}", cost=f"{ln.cost:.2f}", mass_g=f"{ln.mass_g:.1f}",
-                   unit_mass_g="" if ln.unit_mass_g is None else f"{ln.unit_mass_g:g}", quantity=f"{ln.quantity:g}")
+                   unit_mass_g="" if ln.unit_mass_g is None else f"{ln.unit_mass_g:g}", quantity=f"{ln.quantity:g}",
+                   maker=o.maker, mpn=o.mpn, mpn_status=o.status, mpn_source=o.source, order_note=o.note,
+                   link_kind=_link_kind(o))
         w.writerow([row[f] for f in CSV_FIELDS])
-    w.writerow(["total", "total", "", "", "", "", "", "", "", "", "", "", f"{bom.total_cost:.2f}", bom.currency, "",
-                f"{bom.total_mass_g:.1f}", "", "", "", ""])
+    total = dict.fromkeys(CSV_FIELDS, "")
+    total.update(category="total", key="total", cost=f"{bom.total_cost:.2f}", currency=bom.currency,
+                 mass_g=f"{bom.total_mass_g:.1f}")
+    w.writerow([total[f] for f in CSV_FIELDS])
     return buf.getvalue()
+
+
+def _link_kind(o: Order) -> str:
+    """How the CSV describes a line's link."""
+    if o.search:
+        return "shop search (generic part)"
+    return "page read for the MPN (stored copy)" if o.link_read else "not opened here"
+
+
+def order_counts(by_key: Mapping[str, Order]) -> dict[str, int]:
+    """How many lines have each status (the BOM's summary sentence)."""
+    return {status: sum(1 for o in by_key.values() if o.status == status)
+            for status in (VERIFIED, UNVERIFIED, GENERIC, NAMED, MADE)}
 
 
 def write_bom(bom: Bom, folder: Path, *, command: str = "bom", site: dict | None = None, env=None) -> list[Path]:
     """bom.csv, bom.md, bom.html and style.css into ``folder`` (a staging folder)."""
     env = env or environment()
+    by_key = orders(bom)
     ctx = common_context(bom, command)
     ctx.update(bom=bom, node_count=sum(len(ln.nodes) for ln in bom.lines if ln.source == "CAD assembly"),
-               site=bool(site), nav=(site or {}).get("nav", []), page="bom.html")
+               site=bool(site), nav=(site or {}).get("nav", []), page="bom.html", orders=by_key,
+               order_counts=order_counts(by_key), status=dict(verified=VERIFIED, unverified=UNVERIFIED,
+                                                             generic=GENERIC, named=NAMED, made=MADE))
     out = []
-    for name, text in (("bom.csv", bom_csv(bom)), ("bom.md", env.get_template("bom.md.j2").render(ctx)),
+    for name, text in (("bom.csv", bom_csv(bom, by_key)), ("bom.md", env.get_template("bom.md.j2").render(ctx)),
                        ("bom.html", env.get_template("bom.html.j2").render(ctx)),
                        ("style.css", (TEMPLATES / "style.css").read_text())):
         p = folder / name

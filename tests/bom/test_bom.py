@@ -1,7 +1,9 @@
 """The BOM is the CAD assembly joined with the catalogue: counts, masses, filament, packs, outputs."""
 from __future__ import annotations
 
+import copy
 import math
+import re
 
 import pytest
 import yaml
@@ -110,6 +112,12 @@ def _written_filament(d):
                                                                 confidence="estimate")),
      "parts.boson_lens_4p9mm.price: comes fitted to boson_640 (included_with)"),
     (lambda d: d["parts"]["boson_lens_4p9mm"].pop("included_with"), "parts.boson_lens_4p9mm.price: is missing"),
+    (lambda d: d["parts"]["fan_3010_5v"].pop("generic"), "parts.fan_3010_5v.link: is a shop search"),
+    (lambda d: d["parts"]["zed_x"].update(link="https://www.amazon.com/s?k=zed+x"), "parts.zed_x.link: is a shop search"),
+    (lambda d: d["parts"]["boson_sync_breakout"].pop("generic"),
+     "parts.boson_sync_breakout: has vendor generic and no maker part"),
+    (lambda d: d["parts"]["power_switch"].update(generic="no MPN verified"),
+     "parts.power_switch.generic: is given with part"),
 ])
 def test_bad_catalogue(tmp_path, capsys, edit, expected):
     bad = _catalogue(tmp_path, edit)
@@ -204,3 +212,163 @@ def test_cable_routes_supply_with_a_quantity_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2 and "parts.gmsl2_cable.supply.quantity: is 1, but quantity_from: cable_routes computes it" in err, err
     assert not (tmp_path / "out").exists()
+
+
+# ------------------------------------------------------------------------------- what to order
+#: shop search pages, spelled here apart from bom.catalogue's own rule: the search forms of the shops the
+#: catalogue has linked (amazon /s?k=, McMaster-Carr ?s=, a /search? path)
+SEARCH_FORMS = re.compile(r"amazon\.[a-z.]+/s\?k=|mcmaster\.com/[^?]*\?s=|/search\?")
+
+
+def _entries() -> dict:
+    return yaml.safe_load(CATALOGUE.read_text())["parts"]
+
+
+def test_no_entry_links_to_a_search_unless_marked_generic():
+    entries = _entries()
+    searches = {pid for pid, e in entries.items() if SEARCH_FORMS.search(e["link"])}
+    assert searches, "the catalogue still buys generic parts through a search; this test has nothing to check"
+    for pid in searches:
+        assert "generic" in entries[pid] and "part" not in entries[pid], pid
+    for pid, e in entries.items():
+        if "part" in e:
+            assert not SEARCH_FORMS.search(e["link"]), pid
+
+
+def test_every_maker_part_has_a_maker_and_a_source():
+    parts = {pid: e["part"] for pid, e in _entries().items() if "part" in e}
+    assert parts
+    for pid, p in parts.items():
+        assert p["maker"].strip() and p["mpn"].strip(), pid
+        if p["verified"]:
+            assert p["source"].startswith("https://"), pid
+        else:
+            assert p["source"].lower().startswith("not verified here") and "ratings" not in p, pid
+
+
+def _row(html: str, key: str) -> str:
+    slug = re.sub(r"[^a-z0-9]+", "-", key.lower()).strip("-")
+    m = re.search(rf'<tr id="line-{re.escape(slug)}">(.*?)</tr>', html, re.S)
+    assert m, key
+    return m.group(1)
+
+
+def test_the_bom_shows_maker_mpn_source_and_generic_lines(bom_default):
+    """Every line of an entry with a maker part shows maker, MPN and source in bom.csv, bom.html and bom.md;
+    every line of a generic entry says so, and its shop link is shown as a search."""
+    entries, rows = _entries(), read_bom(bom_default)
+    html, md = (bom_default / "bom.html").read_text(), (bom_default / "bom.md").read_text()
+    seen = {"part": 0, "generic": 0}
+    for key, r in rows.items():
+        e = entries.get(key.split(":")[0])
+        if key == "total" or e is None or r["vendor"] == "printed":
+            continue
+        cell = _row(html, key)
+        if "part" in e:
+            p = e["part"]
+            assert (r["maker"], r["mpn"], r["mpn_source"]) == (p["maker"], p["mpn"], p["source"]), key
+            assert r["mpn_status"] == ("MPN verified" if p["verified"] else "MPN not verified"), key
+            assert p["maker"] in cell and p["mpn"] in cell and p["source"] in cell, key
+            assert f"{p['maker']} / {p['mpn']}" in md, key
+            seen["part"] += 1
+        elif "generic" in e:
+            assert r["mpn_status"] == "generic: no MPN verified" and "generic: no MPN verified" in cell, key
+            assert (">search: " in cell) == bool(SEARCH_FORMS.search(r["link"])), key
+            seen["generic"] += 1
+    assert seen["part"] and seen["generic"], seen
+    verified = sum(1 for r in rows.values() if r["mpn_status"] == "MPN verified")
+    generic = sum(1 for r in rows.values() if r["mpn_status"] == "generic: no MPN verified")
+    assert f'What to order: <span class="ok">{verified}</span> lines' in html
+    assert f'<span class="generic">{generic} are generic</span>' in html
+
+
+def _catalogue_problems(tmp_path, rig, edit) -> str:
+    """The problems load_catalogue reports for the shipped catalogue changed by ``edit`` ("" if none)."""
+    from bom.catalogue import CatalogueError, load_catalogue
+    data = copy.deepcopy(yaml.safe_load(CATALOGUE.read_text()))
+    edit(data)
+    path = tmp_path / "parts.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    try:
+        load_catalogue(rig, path)
+    except CatalogueError as exc:
+        return str(exc)
+    return ""
+
+
+def _battery(rig):
+    return next(p for p in rig.desc.parts.values() if p.kind.value == "battery")
+
+
+def test_a_maker_part_rated_below_what_the_rig_assumes_is_refused(tmp_path, rig):
+    """The switch must break the current cad/electrical.py sizes it for, at the pack's full voltage or the
+    DC voltage config/rig.yaml assumes of it, whichever is higher."""
+    switch = rig.part("power_switch")
+    need_a = switch.rating_a.value
+    need_v = max(_battery(rig).output_v.max, switch.rating_dc_v.value)
+
+    def weak_switch(d):
+        d["parts"]["power_switch"]["part"]["ratings"] = {"dc_current_a": need_a / 2, "dc_voltage_v": need_v - 1}
+    err = _catalogue_problems(tmp_path, rig, weak_switch)
+    assert f"parts.power_switch.part.ratings.dc_current_a: L1141A801-AGZ00-000 is rated {need_a / 2:g} A; " \
+           f"config/rig.yaml assumes {need_a:g} A" in err, err
+    assert "parts.power_switch.part.ratings.dc_voltage_v:" in err and f"must stand {need_v:g} V" in err, err
+    assert len(err.splitlines()) == 2, err
+    at_limit = _catalogue_problems(tmp_path, rig, lambda d: d["parts"]["power_switch"]["part"].update(
+        ratings={"dc_current_a": need_a, "dc_voltage_v": need_v}))
+    assert at_limit == ""
+
+
+def _converter(d, **ratings):
+    e = d["parts"]["dc_converter"]
+    e.pop("generic", None)
+    e["link"] = "https://example.org/ex-150-12"
+    e["part"] = {"maker": "Example Power", "mpn": "EX-150-12", "source": "https://example.org/ex-150-12",
+                 "verified": True, "ratings": ratings}
+
+
+def test_a_converter_must_take_the_battery_from_cut_off_to_full(tmp_path, rig):
+    bat = _battery(rig)
+    low = bat.cutoff_v.value
+    conv = rig.part("dc_converter")
+    out = {"min": conv.output_v.min, "max": conv.output_v.max}
+    ok = _catalogue_problems(tmp_path, rig, lambda d: _converter(
+        d, input_v={"min": low - 1, "max": bat.output_v.max + 10}, output_v=out,
+        dc_current_a=conv.rating_a.value))
+    assert ok == ""
+    narrow = _catalogue_problems(tmp_path, rig, lambda d: _converter(
+        d, input_v={"min": low + 1.8, "max": bat.output_v.max + 10}, output_v=out))
+    assert "parts.dc_converter.part.ratings.input_v: EX-150-12 works from" in narrow and \
+           f"the battery gives {low:g} V (cut-off)" in narrow, narrow
+    wrong_out = _catalogue_problems(tmp_path, rig, lambda d: _converter(
+        d, output_v={"min": conv.output_v.max + 7, "max": conv.output_v.max + 7}))
+    assert "parts.dc_converter.part.ratings.output_v:" in wrong_out, wrong_out
+
+
+@pytest.mark.parametrize("part, expected", [
+    ({"verified": False, "source": "https://example.org/page"}, "part.source: is 'https://example.org/page'; an MPN "
+                                                                 "not verified here needs a source starting"),
+    ({"verified": True, "source": "a forum post"}, "part.source: is 'a forum post'; verified: true needs the address"),
+    ({"verified": False, "source": "not verified here: a forum post", "ratings": {"dc_current_a": 30}},
+     "part.ratings: are given for an MPN not verified here"),
+])
+def test_a_maker_part_says_where_its_mpn_was_read(tmp_path, rig, part, expected):
+    def edit(d):
+        d["parts"]["power_switch"]["part"].pop("ratings")
+        d["parts"]["power_switch"]["part"].update(part)
+    err = _catalogue_problems(tmp_path, rig, edit)
+    assert "parts.power_switch." + expected in err, err
+
+
+def test_the_docs_count_what_the_bom_says(bom_default):
+    """docs/bom.md states how many lines are verified, named, made and generic: the default BOM agrees."""
+    text = re.sub(r"\s+", " ", (REPO / "docs" / "bom.md").read_text())
+    m = re.search(r"(\d+) lines\): (\d+) lines carry an MPN read on a stored .*?, (\d+) are named by their "
+                  r"vendor.*?, (\d+) are printed or machined .*?, and (\d+) are generic", text)
+    assert m, "docs/bom.md no longer states the counts"
+    rows = [r for k, r in read_bom(bom_default).items() if k != "total"]
+    status = [r["mpn_status"] for r in rows]
+    assert [int(g) for g in m.groups()] == [len(rows), status.count("MPN verified"),
+                                            status.count("named by its vendor, not verified here"),
+                                            status.count("made from the CAD model"),
+                                            status.count("generic: no MPN verified")]
