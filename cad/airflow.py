@@ -3,6 +3,11 @@
 Paths, each moved by one fan, each a set of the case's vent slots found by where they are (the wall
 they cross and the part beside them), not by the layout code that placed them:
 
+- ``blower_<side>_intake``: the 3010 blower's inlet (``BlowerFan.inlet_diameter_mm``, on its +z
+  face) faces a wall of the case; the slots in that wall whose centres lie within
+  ``INTAKE_REACH_DIAMETERS`` x the inlet's diameter of its axis feed it (``cad/layout/case.py``: a
+  suction opening's draw falls off within about a diameter); need: ``min_area_ratio`` x the inlet's
+  area (``BlowerFan.inlet_area_mm2``);
 - ``blower_<side>_exhaust``: the 3010 blower's outlet, through its fin bank, out of the front wall
   slots on its side and the side wall slots ahead of the fan; need: ``min_area_ratio`` x the
   outlet's area (``Fan.outlet_area_mm2``, from ``BlowerFan.outlet``);
@@ -34,6 +39,7 @@ import cadquery as cq
 import numpy as np
 
 from . import inlet_gap
+from .layout.case import intake_reach_mm
 from .geom import Bounds, bounds_of, box, common_volume_mm3, cylinder
 
 #: the B-rep section is a slab this thin at the wall's mid-plane (its volume / thickness = its area)
@@ -134,6 +140,24 @@ def _window(v: Bounds, axis: int, inner: Bounds, outer: Bounds) -> Window:
     return Window(Bounds(tuple(lo), tuple(hi)), axis, (step[0], step[1]))
 
 
+def inlet_of(part, pose) -> tuple[np.ndarray, np.ndarray]:
+    """A blower's inlet in the rig frame: its centre (on the fan's +z face, ``cad/bought/fan.py``'s frame)
+    and the unit direction it faces. Shapes (3,), (3,)."""
+    centre = np.asarray(pose.apply(np.array([0.0, 0.0, part.size[2] / 2])), dtype=float)
+    return centre, np.asarray(pose.R, dtype=float) @ np.array([0.0, 0.0, 1.0])
+
+
+def feeds_inlet(slot: Bounds, axis: int, outer: Bounds, centre: np.ndarray, facing: np.ndarray, reach_mm: float) -> bool:
+    """Whether a slot feeds an inlet at ``centre`` facing ``facing``: it crosses the wall the inlet faces
+    (the wall across the inlet's main axis, on its side of the case) and its centre lies, in that wall's
+    plane, within ``reach_mm`` of the inlet's axis."""
+    k = int(np.argmax(np.abs(facing)))
+    if axis != k or np.sign(slot.centre[k] - outer.centre[k]) != np.sign(facing[k]):
+        return False
+    u, w = (j for j in range(3) if j != k)
+    return math.hypot(slot.centre[u] - centre[u], slot.centre[w] - centre[w]) <= reach_mm + 1e-9
+
+
 def air_paths(lay) -> list[AirPath]:
     """The case's air paths, their needs and the windows of the slots each passes (see the module)."""
     v = lay.rig.desc.enclosure.vents
@@ -142,6 +166,13 @@ def air_paths(lay) -> list[AirPath]:
     slots = [(b, a) for b, a in slots if a is not None]
     win = lambda b, a: _window(b, a, i, o)     # noqa: E731
     paths = []
+    part, reach = lay.cooling.part, intake_reach_mm(lay.rig)
+    for side, f in lay.cooling.fans.items():
+        centre, facing = inlet_of(part, f.pose)
+        ws = [win(b, a) for b, a in slots if feeds_inlet(b, a, o, centre, facing, reach)]
+        paths.append(AirPath(f"blower_{side}_intake", f"fan_{side}'s {part.inlet_diameter_mm:g} mm inlet",
+                             part.inlet_area_mm2, v.min_area_ratio * part.inlet_area_mm2, tuple(ws),
+                             f"wall its inlet faces, within {reach:g} mm of the inlet's axis"))
     for side, f in lay.cooling.fans.items():
         ws = [win(b, a) for b, a in slots
               if (a == 0 and np.sign(b.centre[1]) == f.sign)
@@ -274,6 +305,16 @@ def fan_disc_points(centre: tuple[float, float], diameter: float) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- the report
+def _shared_slots(paths: list[AirPath]) -> list[str]:
+    """One line per slot that two paths count (an opening's area feeds one fan, or it is counted twice)."""
+    by: dict[Bounds, list[str]] = {}
+    for p in paths:
+        for w in p.windows:
+            by.setdefault(w.box, []).append(p.name)
+    return [f"the slot at ({', '.join(f'{c:.1f}' for c in b.centre)}) mm is counted by {' and '.join(names)}: "
+            f"an opening feeds one path" for b, names in by.items() if len(names) > 1]
+
+
 def airflow_report(asm, paths: list[AirPath] | None = None) -> AirflowReport:
     """Every air path's free area on the B-rep and the STL against its need, and the clear height over
     the devkit's fan, measured on the assembly's parts (so a part moved or a slot filled shows)."""
@@ -313,6 +354,7 @@ def airflow_report(asm, paths: list[AirPath] | None = None) -> AirflowReport:
     gap_stl = float(hits.min() - ob.hi[2]) if np.isfinite(hits).any() else height
     r = AirflowReport(readings, gap_brep, gap_stl, gap_need, gap_by, side=side)
     ratio = rig.desc.enclosure.vents.min_area_ratio
+    r.problems += _shared_slots(paths)
     for g in readings:
         p = g.path
         r.details.append(f"{p.name}: {g.brep_mm2:.0f} mm^2 free (B-rep) / {g.stl_mm2:.0f} mm^2 (STL, {g.rays} rays) "

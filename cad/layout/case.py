@@ -8,7 +8,9 @@ from dataclasses import dataclass
 
 from platform_tools.rig import Rig
 
+from cad.bought.base import part_of_kind
 from cad.bought.cables import cable_table
+from cad.bought.fan import BlowerFan
 from cad.geom import Bounds, Vec3
 
 from .cameras import Cameras, fov_half_angles_deg
@@ -34,6 +36,12 @@ LEDGE_MARGIN_MM = 2.0
 #: the roof's intake slots for the devkit's fan reach this far beyond the devkit's side (the antennas
 #: stand 14 mm beyond it, cad/layout/controls.py)
 ROOF_BEYOND_ORIN_MM = 8.0
+#: a blower draws its intake through the openings whose centres lie within this many inlet diameters of its
+#: inlet's axis, in the wall the inlet faces (cad/airflow.py's ``blower_<side>_intake``): a plain suction
+#: opening's centre-line speed falls to about 7 % of its face speed one diameter out (Dalla Valle's
+#: V = Q / (10 x^2 + A), the industrial-ventilation rule of thumb), so air through a slot further out is
+#: the case's air, not the fan's. A rule of thumb, not a measurement
+INTAKE_REACH_DIAMETERS = 1.0
 
 
 @dataclass(frozen=True)
@@ -152,7 +160,8 @@ def place_vents(rig: Rig, c: Constants, fits: Fits, shell: Shell, lugs, cameras:
                 compute: Compute, converter_box: Bounds, controls: tuple[Bounds, ...] = ()) -> tuple[Bounds, ...]:
     """Every vent slot (cad/airflow.py checks each air path's free area against its fan):
 
-    - the blowers' intakes: vertical slots in the tray's side walls beside each fan;
+    - the blowers' intakes: vertical slots in the tray's side walls, floor to split, round each fan's inlet
+      (which faces its side wall), within :func:`intake_reach_mm` of its axis;
     - the devkit's exhaust: vertical slots in the tray's side walls beside it, floor to split, and
       horizontal ones in the lid's side walls between the side handle's pads (its heat sink blows out
       of its +-y faces, an estimate: ``parts.jetson_agx_orin.dims``);
@@ -190,30 +199,53 @@ def segments(lo: float, hi: float, max_len: float, rib: float) -> list[tuple[flo
     return [(lo + k * (seg + rib), lo + k * (seg + rib) + seg) for k in range(n)]
 
 
+def intake_reach_mm(rig: Rig) -> float:
+    """How far from a blower's inlet axis an opening still feeds it: ``INTAKE_REACH_DIAMETERS`` x the
+    fan part's inlet diameter (``parts.<fan>.dims.inlet_diameter_mm``)."""
+    return INTAKE_REACH_DIAMETERS * BlowerFan.from_rig(rig, part_of_kind(rig, "fan")).inlet_diameter_mm
+
+
 def _side_slots(rig: Rig, fits: Fits, shell: Shell, pitch: float, keep_out, fans: dict[str, Fan],
                 compute: Compute) -> list[Bounds]:
-    """Vertical slots in the tray's side walls beside the fans (``slot_length_mm`` tall, the fan's
-    inlet) and beside the devkit (floor to split in ``segments``: its exhaust), clear of the lugs and
-    the converter."""
+    """Vertical slots in the tray's side walls, floor to split in ``segments``, clear of the lugs and the
+    converter: beside the devkit (its exhaust), and round each fan's inlet (its intake: the inlet faces its
+    side wall), columns from the fan's outlet face backwards (ahead of it the wall is the exhaust's), each
+    segment whose centre is within :func:`intake_reach_mm` of the inlet's axis."""
     v = rig.desc.enclosure.vents
     o, i, split_z, wall, run = shell.outer, shell.interior, shell.split_z, fits.wall, VENT_CUT_OVERRUN_MM
-    z_mid = (i.lo[2] + split_z) / 2
-    full = split_z - i.lo[2] - 2 * wall
-    fan_zl = min(v.slot_length_mm, full)
-    zones = [(f.box.lo[0], f.box.hi[0], [(z_mid - fan_zl / 2, z_mid + fan_zl / 2)]) for f in fans.values()]
-    zones.append((compute.orin_box.lo[0], compute.orin_box.hi[0],
-                  segments(i.lo[2] + wall, split_z - wall, v.slot_length_mm, 2 * fits.min_wall)))
+    full = segments(i.lo[2] + wall, split_z - wall, v.slot_length_mm, 2 * fits.min_wall)
+    b, w = compute.orin_box, v.slot_width_mm
     vents = []
     for s in (1.0, -1.0):
-        x = i.lo[0] + wall + v.slot_width_mm
-        while x < i.hi[0] - wall - v.slot_width_mm:
-            x0, x1 = x - v.slot_width_mm / 2, x + v.slot_width_mm / 2
-            zs = next((zl for a, bb, zl in zones if a <= x0 and x1 <= bb), None)
-            if zs is not None and not any(x1 > a and x0 < bb for a, bb in keep_out[s]):
-                y0, y1 = (i.hi[1] - run, o.hi[1] + run) if s > 0 else (o.lo[1] - run, i.lo[1] + run)
-                vents += [Bounds((x0, y0, za), (x1, y1, zb)) for za, zb in zs]
+        cols = []   # (x, z segments)
+        x = i.lo[0] + wall + w
+        while x < i.hi[0] - wall - w:
+            if b.lo[0] <= x - w / 2 and x + w / 2 <= b.hi[0]:
+                cols.append((x, full))
             x += pitch
+        for f in (f for f in fans.values() if f.sign == s):
+            cols += _intake_columns(f, intake_reach_mm(rig), full, pitch, w, [c for c, _ in cols])
+        y0, y1 = (i.hi[1] - run, o.hi[1] + run) if s > 0 else (o.lo[1] - run, i.lo[1] + run)
+        for x, zs in cols:
+            x0, x1 = x - w / 2, x + w / 2
+            if not any(x1 > a and x0 < bb for a, bb in keep_out[s]):
+                vents += [Bounds((x0, y0, za), (x1, y1, zb)) for za, zb in zs]
     return vents
+
+
+def _intake_columns(f: Fan, reach_mm: float, full: list[tuple[float, float]], pitch: float, width: float,
+                    taken: list[float]) -> list[tuple[float, list[tuple[float, float]]]]:
+    """The slot columns round one fan's inlet: at ``pitch`` from its outlet face backwards while within
+    ``reach_mm`` of its axis (x), each with the segments of ``full`` whose centre is within ``reach_mm`` of the
+    inlet's centre (the fan box's, in x and z), none closer than a pitch to a column ``taken``: [(x, segments)]."""
+    cx, cz = f.box.centre[0], f.box.centre[2]
+    out, x = [], f.box.hi[0] - width / 2
+    while x >= cx - reach_mm:
+        zs = [(za, zb) for za, zb in full if math.hypot(x - cx, (za + zb) / 2 - cz) <= reach_mm]
+        if zs and all(abs(x - c) >= pitch - 1e-9 for c in taken):
+            out.append((x, zs))
+        x -= pitch
+    return out
 
 
 def side_pad_free_x(rig: Rig, c: Constants, shell: Shell) -> tuple[float, float]:

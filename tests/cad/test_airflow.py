@@ -74,12 +74,19 @@ def lay(rig):
     return layout(rig)
 
 
+PATHS = ("blower_left_intake", "blower_right_intake", "blower_left_exhaust", "blower_right_exhaust", "orin_intake",
+         "orin_exhaust")
+
+
 def test_every_path_has_slots_and_needs_what_its_fan_asks(lay, rig):
     paths = {p.name: p for p in air_paths(lay)}
-    assert set(paths) == {"blower_left_exhaust", "blower_right_exhaust", "orin_intake", "orin_exhaust"}
+    assert set(paths) == set(PATHS)
     ratio = rig.desc.enclosure.vents.min_area_ratio
     outlet = rig.dim("fan_3010_5v", "outlet_width_mm") * rig.dim("fan_3010_5v", "outlet_height_mm")
     assert paths["blower_left_exhaust"].need_mm2 == pytest.approx(ratio * outlet)      # 1.5 x 21 x 8.3 mm
+    inlet = math.pi / 4 * rig.dim("fan_3010_5v", "inlet_diameter_mm") ** 2
+    for side in ("left", "right"):
+        assert paths[f"blower_{side}_intake"].need_mm2 == pytest.approx(ratio * inlet)  # 1.5 x pi/4 x 26^2
     d, hub = rig.dim("jetson_agx_orin", "fan_diameter_mm"), rig.dim("jetson_agx_orin", "fan_hub_diameter_mm")
     assert paths["orin_intake"].need_mm2 == pytest.approx(ratio * math.pi / 4 * (d * d - hub * hub))
     assert all(p.windows for p in paths.values())
@@ -118,7 +125,7 @@ def test_vents_miss_the_pads_lugs_and_controls_and_print_along_their_bridges(lay
 def test_the_default_rig_passes_and_both_measurements_agree(results, asm):
     r = results["airflow"]
     assert r.ok, r.details
-    for name in ("blower_left_exhaust", "blower_right_exhaust", "orin_intake", "orin_exhaust"):
+    for name in PATHS:
         d = r.data[name]
         assert d["brep_mm2"] >= d["need_mm2"] and d["stl_mm2"] >= d["need_mm2"], (name, d)
         assert abs(d["brep_mm2"] - d["stl_mm2"]) <= AGREE_REL * d["brep_mm2"] + AGREE_ABS_MM2 * d["slots"]
@@ -180,13 +187,37 @@ def test_the_card_lowered_back_to_1_mm_fails_naming_the_intake_and_the_card(asm)
     assert r.data["orin_inlet_gap"]["stl_mm"] == pytest.approx(1.0, abs=0.01)
 
 
+def _trimesh_free_mm2(mesh, boxes, axis: int, pitch: float) -> float:
+    """The area through ``boxes`` ((lo, hi) arrays (3,), each spanning the wall along ``axis``) that no triangle
+    of ``mesh`` stops: trimesh's ray caster along +``axis`` on a grid of ``pitch`` cells from the boxes' corner
+    (not aligned with the slots), each ray from 1 mm before the wall to 1 mm past it."""
+    from tests.cad.trimesh_rays import ray_hits
+    lo, hi = np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
+    # only the triangles near these slots reach the ray caster (a broad phase; trimesh does the rest)
+    near = np.all(mesh.triangles.max(axis=1) >= lo - 1.0, axis=1) & np.all(mesh.triangles.min(axis=1) <= hi + 1.0, axis=1)
+    tri, normals = np.asarray(mesh.triangles)[near], np.asarray(mesh.face_normals)[near]
+    u, w = (k for k in range(3) if k != axis)
+    uu, ww = np.meshgrid(np.arange(lo[u] + pitch / 2, hi[u], pitch), np.arange(lo[w] + pitch / 2, hi[w], pitch),
+                         indexing="ij")
+    inside = np.zeros(uu.shape, bool)
+    for blo, bhi in boxes:
+        inside |= (uu >= blo[u]) & (uu < bhi[u]) & (ww >= blo[w]) & (ww < bhi[w])
+    origins = np.zeros((int(inside.sum()), 3))
+    origins[:, u], origins[:, w], origins[:, axis] = uu[inside], ww[inside], lo[axis] - 1.0
+    dirs = np.zeros_like(origins)
+    dirs[:, axis] = 1.0
+    _, ray, loc = ray_hits(tri, normals, origins, dirs)
+    stopped = np.zeros(len(origins), bool)
+    stopped[ray[loc[:, axis] <= hi[axis] + 1.0]] = True
+    return float((~stopped).sum()) * pitch * pitch
+
+
 @pytest.mark.slow
 def test_trimesh_reading_the_exported_lid_finds_the_b_rep_s_roof_area(asm, tmp_path):
     """The lid exported to STL, read by trimesh, cast through by trimesh's ray caster on a grid of its
     own (0.2 mm, not aligned with the slots), over the roof's two inner rows of slots on the left: their
     free area equals the B-rep's within the grid's edge error (half a cell along every slot edge)."""
     import cadquery as cq
-    from tests.cad.trimesh_rays import ray_hits
     from cad.airflow import brep_free_area_mm2
     path = tmp_path / "case_lid.stl"
     lid = asm.node("case_lid").shape(asm.cache)
@@ -196,24 +227,8 @@ def test_trimesh_reading_the_exported_lid_finds_the_b_rep_s_roof_area(asm, tmp_p
     rows = sorted({round(w.box.centre[1], 3) for w in intake.windows if w.box.centre[1] > 0})[:2]
     windows = tuple(w for w in intake.windows if round(w.box.centre[1], 3) in rows)
     assert len(windows) == 8
-    lo = np.min([w.box.lo for w in windows], axis=0)
-    hi = np.max([w.box.hi for w in windows], axis=0)
-    # only the triangles over these slots reach the ray caster (a broad phase; trimesh does the rest)
-    near = np.all(mesh.triangles.max(axis=1) >= lo - 1.0, axis=1) & np.all(mesh.triangles.min(axis=1) <= hi + 1.0, axis=1)
-    tri, normals = np.asarray(mesh.triangles)[near], np.asarray(mesh.face_normals)[near]
     pitch = 0.2
-    xs, ys = np.arange(lo[0] + pitch / 2, hi[0], pitch), np.arange(lo[1] + pitch / 2, hi[1], pitch)
-    xx, yy = np.meshgrid(xs, ys, indexing="ij")
-    inside = np.zeros(xx.shape, bool)
-    for w in windows:
-        inside |= (xx >= w.box.lo[0]) & (xx < w.box.hi[0]) & (yy >= w.box.lo[1]) & (yy < w.box.hi[1])
-    pts = np.column_stack([xx[inside], yy[inside]])
-    origins = np.column_stack([pts, np.full(len(pts), lo[2] - 1.0)])
-    dirs = np.tile([0.0, 0.0, 1.0], (len(pts), 1))
-    _, ray, loc = ray_hits(tri, normals, origins, dirs)
-    stopped = np.zeros(len(pts), bool)
-    stopped[ray[loc[:, 2] <= hi[2] + 1.0]] = True
-    free = float((~stopped).sum()) * pitch * pitch
+    free = _trimesh_free_mm2(mesh, [(np.array(w.box.lo), np.array(w.box.hi)) for w in windows], 2, pitch)
     brep = brep_free_area_mm2([lid], windows)
     edge = sum(2 * (w.box.size[0] + w.box.size[1]) for w in windows) * pitch / 2
     # the built lid has exactly the slots the windows were grown from (one cell each side), 3 mm wide
@@ -332,3 +347,96 @@ def test_the_standoffs_moved_round_the_fan_s_axis_fail_the_intake_not_its_clear_
     assert r.data["orin_inlet_gap"]["nearest"] == "zed_link_quad"
     s = r.data["orin_inlet_side"]
     assert s["open_brep_mm2"] < s["need_mm2"] and s["open_stl_mm2"] < s["need_mm2"]
+
+
+# ----------------------------------------------------------------------------- each blower's intake on its own
+def test_an_opening_feeds_an_inlet_only_in_the_wall_it_faces_and_within_reach():
+    from cad.airflow import feeds_inlet
+    outer = Bounds((-100, -50, -40), (10, 50, 30))
+    centre, facing = np.array([-40.0, 45.0, -10.0]), np.array([0.0, 1.0, 0.0])      # an inlet facing +y
+    slot = lambda x, y, z: Bounds((x - 1.5, y - 1.0, z - 10.0), (x + 1.5, y + 1.0, z + 10.0))   # noqa: E731
+    assert feeds_inlet(slot(-40 + 15, 50, -10 + 20), 1, outer, centre, facing, 26.0)        # 25 mm out: in
+    assert not feeds_inlet(slot(-40 + 18, 50, -10 + 20), 1, outer, centre, facing, 26.0)    # 26.9 mm out: beyond
+    assert not feeds_inlet(slot(-40, -50, -10), 1, outer, centre, facing, 26.0)             # the other side wall
+    assert not feeds_inlet(Bounds((-41, 20, 29), (-39, 23, 31)), 2, outer, centre, facing, 26.0)   # the roof
+
+
+def test_a_slot_two_paths_count_is_one_problem():
+    from cad.airflow import AirPath, _shared_slots
+    w = Window(Bounds((0, 0, 0), (3, 2.4, 20)), 1, (0.25, 0.25))
+    other = Window(Bounds((6, 0, 0), (9, 2.4, 20)), 1, (0.25, 0.25))
+    a, b = AirPath("a", "fan a", 1.0, 1.5, (w, other), "x"), AirPath("b", "fan b", 1.0, 1.5, (w,), "x")
+    (line,) = _shared_slots([a, b])
+    assert "counted by a and b" in line and "(1.5, 1.2, 10.0)" in line
+    assert _shared_slots([a]) == []
+
+
+def test_each_blower_intake_is_the_slots_round_its_own_inlet_and_no_other_path_s(lay, rig):
+    """Every intake slot is in the side wall the fan's inlet faces (the built fan's +z face, on the fan's side),
+    within one inlet diameter of the inlet's centre (taken here from the fan's box, not the check's pose
+    arithmetic); no slot is counted by two paths."""
+    paths = {p.name: p for p in air_paths(lay)}
+    d = rig.dim("fan_3010_5v", "inlet_diameter_mm")
+    for side, f in lay.cooling.fans.items():
+        ws = paths[f"blower_{side}_intake"].windows
+        assert len(ws) >= 6
+        for w in ws:
+            c = np.asarray(w.box.centre)
+            assert w.axis == 1 and np.sign(c[1]) == f.sign
+            assert math.hypot(c[0] - f.box.centre[0], c[2] - f.box.centre[2]) <= d + 1e-9
+            assert c[2] < lay.case.split_z and w.box.hi[0] <= f.box.hi[0] + w.step[0] + 1e-9   # the tray, behind the outlet
+    boxes = [w.box for p in paths.values() for w in p.windows]
+    assert len(boxes) == len(set(boxes))
+
+
+def _intake_vents(asm, sign):
+    """The tray's side-wall slots on one side from one inlet diameter behind the fan's centre to its outlet
+    face: found here from the vents' boxes, not by the check's rule."""
+    lay = asm.layout
+    f = next(f for f in lay.cooling.fans.values() if f.sign == sign)
+    d = asm.rig.dim("fan_3010_5v", "inlet_diameter_mm")
+    return {v for v in lay.case.vents if _wall_axis(v, lay.case.outer) == 1 and np.sign(v.centre[1]) == sign
+            and f.box.centre[0] - d <= v.centre[0] <= f.box.hi[0] and v.hi[2] <= lay.case.split_z}
+
+
+@pytest.mark.slow
+def test_the_left_blower_s_slots_closed_fail_its_intake_only(asm):
+    from cad import checks
+    r = checks.check_airflow(_with_case_boxes(asm, _intake_vents(asm, 1.0)))
+    assert not r.ok
+    bad = [d for d in r.details if "free through" in d and "under" in d]
+    assert [d.split(":")[0] for d in bad] == ["blower_left_intake"]
+    assert r.data["blower_left_intake"]["brep_mm2"] == pytest.approx(0.0, abs=1.0)
+    assert r.data["blower_left_intake"]["stl_mm2"] == pytest.approx(0.0, abs=1.0)
+    right = r.data["blower_right_intake"]
+    assert right["brep_mm2"] >= right["need_mm2"] and right["stl_mm2"] >= right["need_mm2"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_trimesh_reading_the_exported_tray_finds_each_intake_s_area(asm, tmp_path, sign):
+    """The tray exported to STL, read by trimesh, cast through along y by trimesh's ray caster on a 0.2 mm
+    grid of its own over the slots round one fan's inlet (found from the vents' boxes, not the check's
+    windows): their free area is the B-rep's within the grid's edge error, and at least the need."""
+    import cadquery as cq
+    path = tmp_path / "case_lower.stl"
+    tray = asm.node("case_lower").shape(asm.cache)
+    cq.exporters.export(tray, str(path), "STL", tolerance=0.1, angularTolerance=0.2)
+    mesh = trimesh.load(str(path), process=False)
+    vents = sorted(_intake_vents(asm, sign), key=lambda v: (v.lo[0], v.lo[2]))
+    assert len(vents) >= 6
+    o, i = asm.layout.case.outer, asm.layout.case.interior
+    y0, y1 = (i.hi[1], o.hi[1]) if sign > 0 else (o.lo[1], i.lo[1])
+    pitch = 0.2
+    boxes = [(np.array([v.lo[0] - pitch, y0, v.lo[2] - pitch]), np.array([v.hi[0] + pitch, y1, v.hi[2] + pitch]))
+             for v in vents]
+    free = _trimesh_free_mm2(mesh, boxes, 1, pitch)
+    side = "left" if sign > 0 else "right"
+    intake = next(p for p in air_paths(asm.layout) if p.name == f"blower_{side}_intake")
+    from cad.airflow import brep_free_area_mm2
+    brep = brep_free_area_mm2([tray], intake.windows)
+    edge = sum(2 * (v.size[0] + v.size[2]) for v in vents) * pitch / 2
+    slots = sum(v.size[0] * v.size[2] for v in vents)
+    assert brep == pytest.approx(slots, rel=1e-3)               # every slot the layout placed is cut through the tray
+    assert abs(free - brep) <= edge, (free, brep, edge)
+    assert min(free, brep) >= intake.need_mm2

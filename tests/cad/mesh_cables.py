@@ -1,0 +1,260 @@
+"""The cables seen from their meshes (tests only): an independent path beside ``cad/cables.py``'s B-rep check.
+
+Each swept cable is exported to STL and read back by trimesh; from the triangles alone (numpy and trimesh, no
+call into the check's code) this module finds the tube's two end caps, marches its centre line through plane
+sections, fits circles to the bends, measures its length two ways (the centre line's chords; the volume over
+the cap's area) and tests points inside the tube for containment in other meshes (ray parity, trimesh's ray
+caster with a grid broad phase: no rtree here).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import trimesh
+from trimesh.ray.ray_triangle import ray_triangle_id
+
+#: the cables' STL: finer than the parts' (the centre line and the bends' radii are read off it)
+CABLE_TOLERANCE_MM, CABLE_ANGULAR_RAD = 0.01, 0.1
+#: the parts' STL, as the exports write them
+PART_TOLERANCE_MM, PART_ANGULAR_RAD = 0.1, 0.2
+#: a plane section's step along the centre line
+STEP_MM = 0.25
+#: the points of one bend see their circles' centres within this share of its radius of the run's mean centre
+SAME_CENTRE_SHARE = 0.25
+#: the containment rays' direction: off every axis, so no ray runs along a box's edge or face
+RAY_DIR = np.array([0.0123, 0.0371, 1.0]) / np.linalg.norm([0.0123, 0.0371, 1.0])
+
+
+def read_stl(shape, path: Path, tolerance: float, angular: float) -> trimesh.Trimesh:
+    """``shape`` (a CadQuery shape) exported to STL at ``path`` and read back by trimesh (the file, not the B-rep)."""
+    import cadquery as cq
+    cq.exporters.export(shape, str(path), "STL", tolerance=tolerance, angularTolerance=angular)
+    return trimesh.load(str(path))
+
+
+# ----------------------------------------------------------------------------- caps and sections
+@dataclass(frozen=True)
+class Cap:
+    centre: np.ndarray     # (3,)
+    normal: np.ndarray     # (3,) outward
+    area_mm2: float
+
+
+def end_caps(mesh: trimesh.Trimesh) -> list[Cap]:
+    """The tube's flat end faces: the groups of triangles sharing one plane (normal and offset) whose area
+    is a disc's (their extent squared x pi / 4 within 5 %). Every other face of a swept circle is curved."""
+    n = mesh.face_normals
+    off = np.einsum("ij,ij->i", n, mesh.triangles_center)
+    keys = np.round(np.column_stack([n * 1e3, off * 10]), 0)
+    _, inv = np.unique(keys, axis=0, return_inverse=True)
+    caps = []
+    for g in np.unique(inv):
+        idx = np.flatnonzero(inv == g)
+        if len(idx) < 8:
+            continue
+        area = float(mesh.area_faces[idx].sum())
+        pts = mesh.triangles[idx].reshape(-1, 3)
+        width = float(np.ptp(pts, axis=0).max())
+        if abs(area - np.pi / 4 * width ** 2) <= 0.05 * area:
+            w = mesh.area_faces[idx]
+            centre = (mesh.triangles_center[idx] * w[:, None]).sum(0) / w.sum()
+            caps.append(Cap(centre, n[idx[0]] / np.linalg.norm(n[idx[0]]), area))
+    return caps
+
+
+def plane_cut(mesh: trimesh.Trimesh, origin: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """The segments (K, 2, 3) where the plane through ``origin`` with ``normal`` cuts the mesh's triangles."""
+    dv = (mesh.vertices - origin) @ normal                      # signed distance of every vertex
+    d = dv[mesh.faces]                                          # (N, 3)
+    cut = (d.min(1) < 0) & (d.max(1) > 0)
+    tri, d = mesh.vertices[mesh.faces[cut]], d[cut]
+    pts = []
+    for a, b in ((0, 1), (1, 2), (2, 0)):
+        da, db = d[:, a], d[:, b]
+        t = np.where((da < 0) != (db < 0), da / np.where(da == db, 1.0, da - db), np.nan)
+        pts.append(tri[:, a] + t[:, None] * (tri[:, b] - tri[:, a]))
+    pts = np.stack(pts, axis=1)                                 # (K, 3 edges, 3)
+    ok = ~np.isnan(pts[..., 0])
+    pts, ok = pts[ok.sum(1) == 2], ok[ok.sum(1) == 2]           # a plane through a vertex cuts one edge: skip it
+    two = np.argsort(~ok, axis=1, kind="stable")[:, :2]         # the two edges the plane crosses
+    return np.take_along_axis(pts, two[..., None], axis=1)
+
+
+def ring_centre(segments: np.ndarray, near: np.ndarray, within_mm: float) -> np.ndarray | None:
+    """The centre of the section's loop nearest ``near``: the circle fitted through the ends of its segments
+    within ``within_mm`` of ``near`` (a fit, so a segment the plane skipped at a vertex does not pull it)."""
+    if len(segments) == 0:
+        return None
+    mid = segments.mean(axis=1)
+    keep = np.linalg.norm(mid - near, axis=1) <= within_mm
+    if keep.sum() < 3:
+        return None
+    return fit_circle(segments[keep].reshape(-1, 3))[1]
+
+
+def centreline(mesh: trimesh.Trimesh, step_mm: float = STEP_MM) -> tuple[np.ndarray, float]:
+    """The tube's centre line marched from one end cap to the other through plane sections ``step_mm`` apart
+    (each plane normal to the line's direction, extrapolated from the last two centres), and the tube's radius
+    from the caps' area. Shapes: (M, 3) points from cap to cap, float."""
+    caps = end_caps(mesh)
+    if len(caps) != 2:
+        raise ValueError(f"a swept cable has two flat end caps; found {len(caps)}")
+    a, b = caps
+    r = float(np.sqrt((a.area_mm2 + b.area_mm2) / 2 / np.pi))
+    pts, d = [a.centre], -a.normal
+    for _ in range(100000):
+        q = pts[-1] + step_mm * d
+        if (q - b.centre) @ b.normal > -step_mm / 2:      # the next section would reach the far cap's plane
+            break
+        c = ring_centre(plane_cut(mesh, q, d), q, 1.5 * r)
+        if c is None:
+            raise ValueError(f"the section {step_mm:g} mm past {np.round(pts[-1], 2).tolist()} finds no tube")
+        chord = (c - pts[-1]) / np.linalg.norm(c - pts[-1])
+        # the tangent at c: the chord's direction turned on by half the turn between the last two chords (from
+        # the measured points only; extrapolating from the last plane's normal feeds its error back and swings)
+        d = chord if len(pts) < 2 else 1.5 * chord - 0.5 * (pts[-1] - pts[-2]) / np.linalg.norm(pts[-1] - pts[-2])
+        d /= np.linalg.norm(d)
+        pts.append(c)
+    else:
+        raise ValueError("the centre line never reached the other cap")
+    pts.append(b.centre)
+    return np.asarray(pts), r
+
+
+# ----------------------------------------------------------------------------- bends and lengths
+def circle_through(p: np.ndarray, q: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The circle through each triple of points (K, 3): radii (K,) (inf for a straight triple) and centres (K, 3)."""
+    a, b = p - s, q - s
+    axb = np.cross(a, b)
+    n2 = (axb ** 2).sum(-1)
+    num = np.cross((a ** 2).sum(-1)[:, None] * b - (b ** 2).sum(-1)[:, None] * a, axb)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = s + num / (2 * n2[:, None])
+        r = np.where(n2 > 1e-18, np.linalg.norm(c - s, axis=1), np.inf)
+    return r, c
+
+
+def fit_circle(points: np.ndarray) -> tuple[float, np.ndarray]:
+    """The least-squares circle (Kasa's algebraic fit) through points (K, 3) in their best plane: radius, centre."""
+    c0 = points.mean(axis=0)
+    _, _, vt = np.linalg.svd(points - c0)
+    uv = (points - c0) @ vt[:2].T
+    A = np.column_stack([2 * uv, np.ones(len(uv))])
+    sol, *_ = np.linalg.lstsq(A, (uv ** 2).sum(1), rcond=None)
+    r = float(np.sqrt(sol[2] + sol[0] ** 2 + sol[1] ** 2))
+    return r, c0 + sol[:2] @ vt[:2]
+
+
+@dataclass(frozen=True)
+class MeshBend:
+    radius_mm: float       # the circle fitted to the bend's points
+    arc_mm: float          # the length of centre line it was fitted over (the bend's arc less a span at each end)
+    centre: np.ndarray     # (3,)
+
+
+def bends(points: np.ndarray, straight_mm: float, span_mm: float) -> list[MeshBend]:
+    """The bends of a centre line (M, 3), from the circle through each point and the points ``span_mm`` either
+    side: a bend is a run of points whose circles are under ``straight_mm`` and whose centres stay within
+    ``SAME_CENTRE_SHARE`` of the radius of the run's mean centre (one arc; the next bend's centre is a radius or
+    more away), fitted by one circle through the run's points whose own circle is within 10 % of the run's
+    median (the points whose span reaches past the arc's ends left out). An arc shorter than about two spans
+    is not resolved."""
+    k = max(1, int(round(span_mm / np.linalg.norm(np.diff(points, axis=0), axis=1).mean())))
+    if len(points) <= 2 * k:
+        return []
+    r, c = circle_through(points[:-2 * k], points[k:-k], points[2 * k:])
+    out, run = [], []
+
+    def close():
+        if len(run) < 3:
+            return
+        rr = r[run]
+        keep = [i for i in run if abs(r[i] - np.median(rr)) <= 0.1 * np.median(rr)]
+        if len(keep) >= 3:
+            p = points[[k + i for i in keep]]
+            rad, centre = fit_circle(p)
+            out.append(MeshBend(rad, polyline_length_mm(p), centre))
+
+    for i in range(len(r)):
+        if r[i] < straight_mm and (not run or np.linalg.norm(c[i] - c[run].mean(0)) <= SAME_CENTRE_SHARE * r[i]):
+            run.append(i)
+            continue
+        close()
+        run = [i] if r[i] < straight_mm else []
+    close()
+    return out
+
+
+def polyline_length_mm(points: np.ndarray) -> float:
+    return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+
+
+def volume_length_mm(mesh: trimesh.Trimesh) -> float:
+    """The tube's length as its volume over its cross-section (the mean of the two caps' tessellated areas, the
+    same polygon the sweep carries along)."""
+    caps = end_caps(mesh)
+    return float(mesh.volume / np.mean([c.area_mm2 for c in caps]))
+
+
+# ----------------------------------------------------------------------------- inside points and containment
+def inside_points(points: np.ndarray, radius: float, share: float = 0.6, trim_mm: float = 0.2) -> np.ndarray:
+    """Points strictly inside the tube: each centre-line point (not the caps) and four around it at ``share`` x
+    the radius in its section's plane, dropping those within ``trim_mm`` of either end. Shape (K, 3)."""
+    t = np.gradient(points, axis=0)
+    t /= np.linalg.norm(t, axis=1)[:, None]
+    ref = np.where(np.abs(t[:, 2:3]) < 0.9, np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]))
+    u = np.cross(t, ref)
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    v = np.cross(t, u)
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+    keep = (s >= trim_mm) & (s <= s[-1] - trim_mm)
+    p, u, v = points[keep], u[keep], v[keep]
+    rr = share * radius
+    return np.concatenate([p, p + rr * u, p - rr * u, p + rr * v, p - rr * v])
+
+
+class GridBoxes:
+    """The broad phase trimesh's ray caster asks of an r-tree, over a 2-d grid in x, y of the triangles' boxes:
+    ``bounds`` and ``intersection(box)`` (the triangles whose box meets ``box``)."""
+
+    def __init__(self, tri: np.ndarray, cell_mm: float = 4.0):
+        self.lo, self.hi = tri.min(axis=1), tri.max(axis=1)
+        self.bounds = np.concatenate([self.lo.min(axis=0), self.hi.max(axis=0)])
+        self.cell, self.o = cell_mm, self.bounds[:2]
+        self.cells: dict[tuple[int, int], list[int]] = {}
+        a = np.floor((self.lo[:, :2] - self.o) / cell_mm).astype(int)
+        b = np.floor((self.hi[:, :2] - self.o) / cell_mm).astype(int)
+        for k in range(len(tri)):
+            for i in range(a[k, 0], b[k, 0] + 1):
+                for j in range(a[k, 1], b[k, 1] + 1):
+                    self.cells.setdefault((i, j), []).append(k)
+
+    def intersection(self, box):
+        box = np.asarray(box)
+        a = np.floor((box[:2] - self.o) / self.cell).astype(int)
+        b = np.floor((box[3:5] - self.o) / self.cell).astype(int)
+        cand = {k for i in range(a[0], b[0] + 1) for j in range(a[1], b[1] + 1) for k in self.cells.get((i, j), ())}
+        if not cand:
+            return np.zeros(0, int)
+        c = np.fromiter(cand, int)
+        ok = np.all(self.lo[c] <= box[3:], axis=1) & np.all(self.hi[c] >= box[:3], axis=1)
+        return c[ok]
+
+
+def contains(mesh: trimesh.Trimesh, points: np.ndarray, tree: GridBoxes | None = None) -> np.ndarray:
+    """Which points (K, 3) are inside the closed mesh: an odd count of crossings along ``RAY_DIR`` (trimesh's
+    ray-triangle test with every hit, the grid broad phase). Points outside the mesh's box are outside."""
+    lo, hi = mesh.bounds
+    out = np.zeros(len(points), bool)
+    cand = np.flatnonzero(np.all(points >= lo, axis=1) & np.all(points <= hi, axis=1))
+    if len(cand) == 0:
+        return out
+    tree = tree or GridBoxes(mesh.triangles)
+    dirs = np.tile(RAY_DIR, (len(cand), 1))
+    _, ray, _ = ray_triangle_id(mesh.triangles, points[cand], dirs, tree=tree, multiple_hits=True,
+                                triangles_normal=mesh.face_normals)
+    counts = np.bincount(ray, minlength=len(cand))
+    out[cand] = counts % 2 == 1
+    return out
