@@ -5,8 +5,10 @@ Every problem is one line naming the file, the line and the entry, as the rig lo
 
 Besides prices and quantities it checks what is to be ordered (:func:`_purchase_rules`): a shop search is
 no product, so only an entry marked ``generic`` (no MPN verified) may link to one; a "generic" vendor
-needs a maker part or that mark; a maker part says where its MPN was read; and a part's ratings, copied
-from that page, are at least what config/rig.yaml assumes of it (:func:`_rating_rules`).
+needs a maker part or that mark; a maker part says where its MPN was read; a rig part's maker and MPN are
+said once, in config/rig.yaml, unless the part is a candidate the CAD model cannot hold yet
+(:func:`_identity_rules`); and a part's ratings, copied from that page, are at least what config/rig.yaml
+assumes of it (:func:`_rating_rules`).
 """
 from __future__ import annotations
 
@@ -200,8 +202,32 @@ def _purchase_rules(cat: Catalogue, rig: Rig) -> Iterator[Problem]:
                                 "or generic: <why no MPN was verified>")
         if e.part is not None:
             yield from _evidence_rules(e.part, path + ("part",))
+            yield from _identity_rules(e.part, pid, rig, path + ("part",))
             if e.part.ratings is not None and pid in rig.desc.parts:
                 yield from _rating_rules(e.part, pid, rig, path + ("part", "ratings"))
+
+
+def _identity_rules(part: MakerPart, pid: str, rig: Rig, path: tuple) -> Iterator[Problem]:
+    """Maker and MPN said once: a rig part's are its vendor and part_number in config/rig.yaml; a supply
+    or a candidate (a part the rig does not describe yet) names its own."""
+    mine = rig.desc.parts.get(pid)
+    if mine is None or part.candidate is not None:
+        for key in ("maker", "mpn"):
+            if not (getattr(part, key) or "").strip():
+                yield Problem(path + (key,), "is missing; " + ("a candidate the rig description does not hold yet"
+                                                              if mine is not None else "a part not in the rig "
+                                                              "description") + " names its maker and MPN")
+        if mine is not None and (part.maker, part.mpn) == (mine.vendor, mine.part_number):
+            yield Problem(path + ("candidate",), f"is given, but config/rig.yaml parts.{pid} already is "
+                                                 f"{mine.vendor} {mine.part_number}; remove candidate, maker and mpn")
+        return
+    for key, rig_key, have in (("maker", "vendor", mine.vendor), ("mpn", "part_number", mine.part_number)):
+        if getattr(part, key) is not None:
+            yield Problem(path + (key,), f"is {getattr(part, key)!r}; the rig description holds it "
+                                         f"(config/rig.yaml parts.{pid}.{rig_key}: {have!r}): remove it here")
+    if mine.vendor.lower() == "generic":
+        yield Problem(path, f"names no candidate, but config/rig.yaml parts.{pid} is generic: put the maker and "
+                            f"MPN in parts.{pid}.vendor and part_number, or mark this part a candidate")
 
 
 def _evidence_rules(part: MakerPart, path: tuple) -> Iterator[Problem]:
@@ -222,25 +248,26 @@ def _rating_rules(part: MakerPart, pid: str, rig: Rig, path: tuple) -> Iterator[
     use those) and against the battery it hangs on."""
     from cad.bought.base import part_of_kind
     r, mine = part.ratings, rig.part(pid)
+    mpn = part.mpn or mine.part_number
     bat_id = part_of_kind(rig, "battery")
     bat = rig.part(bat_id)
     low_v = bat.cutoff_v.value if bat.cutoff_v is not None else bat.output_v.min
     if r.dc_current_a is not None and mine.rating_a is not None and r.dc_current_a < mine.rating_a.value:
-        yield Problem(path + ("dc_current_a",), f"{part.mpn} is rated {r.dc_current_a:g} A; config/rig.yaml assumes "
+        yield Problem(path + ("dc_current_a",), f"{mpn} is rated {r.dc_current_a:g} A; config/rig.yaml assumes "
                                                 f"{mine.rating_a.value:g} A (parts.{pid}.rating_a, checked by "
                                                 "cad/electrical.py)")
     if r.dc_voltage_v is not None:
         need, why = max((bat.output_v.max, f"the battery's full {bat.output_v.max:g} V (parts.{bat_id}.output_v.max)"),
                         (mine.rating_dc_v.value if mine.rating_dc_v else 0.0, f"parts.{pid}.rating_dc_v"))
         if r.dc_voltage_v < need:
-            yield Problem(path + ("dc_voltage_v",), f"{part.mpn} is rated to {r.dc_voltage_v:g} V DC; it must "
+            yield Problem(path + ("dc_voltage_v",), f"{mpn} is rated to {r.dc_voltage_v:g} V DC; it must "
                                                     f"stand {need:g} V ({why})")
     if r.input_v is not None and not r.input_v.min <= low_v <= bat.output_v.max <= r.input_v.max:
-        yield Problem(path + ("input_v",), f"{part.mpn} works from {r.input_v.min:g} to {r.input_v.max:g} V; the "
+        yield Problem(path + ("input_v",), f"{mpn} works from {r.input_v.min:g} to {r.input_v.max:g} V; the "
                                            f"battery gives {low_v:g} V (cut-off) to {bat.output_v.max:g} V "
                                            f"(parts.{bat_id})")
     for key, want in (("output_v", mine.output_v), ("supply_v", mine.supply_v)):
         got = getattr(r, key)
         if got is not None and want is not None and not got.min <= want.min <= want.max <= got.max:
-            yield Problem(path + (key,), f"{part.mpn} is rated {got.min:g}-{got.max:g} V; config/rig.yaml assumes "
+            yield Problem(path + (key,), f"{mpn} is rated {got.min:g}-{got.max:g} V; config/rig.yaml assumes "
                                          f"{want.min:g}-{want.max:g} V (parts.{pid}.{key})")

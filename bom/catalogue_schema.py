@@ -19,10 +19,12 @@ Three kinds of entry:
 
 ``price.amount`` is the price of one pack of ``pack_size`` units; the BOM buys whole packs.
 
-What to order: an entry names either the manufacturer part to buy (``part``: maker, MPN, the page the
-MPN was read on, and the ratings copied from that page) or says why none could be verified
-(``generic``); an entry whose vendor is "generic" must do one or the other, and only a generic entry may
-link to a shop search (catalogue._purchase_rules).
+What to order: an entry names either the manufacturer part to buy (``part``: the page the MPN was read
+on, and the ratings copied from that page) or says why none could be verified (``generic``); an entry
+whose vendor is "generic" must do one or the other, and only a generic entry may link to a shop search
+(catalogue._purchase_rules). The maker and MPN of a rig part are said once, in config/rig.yaml
+(``parts.<id>.vendor`` and ``part_number``): its ``part`` block holds only the evidence. A supply, or a
+``candidate`` the CAD model cannot hold yet (the rig then still describes its estimate), names its own.
 """
 from __future__ import annotations
 
@@ -113,8 +115,6 @@ class Ratings:
 @dataclass(frozen=True)
 class MakerPart:
     """The manufacturer part to order, and the evidence for it."""
-    maker: str
-    mpn: str
     #: the address of the stored page the MPN and ratings were read on (verified: true), or text starting
     #: "not verified here" that says what the MPN rests on instead (verified: false)
     source: str
@@ -123,6 +123,13 @@ class MakerPart:
     ratings: Optional[Ratings] = None
     #: what to check before ordering (an option code, a size the CAD model does not have yet)
     note: Optional[str] = None
+    #: maker and MPN: for a rig part they are config/rig.yaml's vendor and part_number (given here only
+    #: with ``candidate``); a supply names them here
+    maker: Optional[str] = None
+    mpn: Optional[str] = None
+    #: why this part, chosen for the BOM, is not yet the one config/rig.yaml describes (it does not fit the
+    #: CAD model): the BOM shows it as a candidate, not as the part to order
+    candidate: Optional[str] = None
 
 
 @dataclass(frozen=True)

@@ -2,8 +2,10 @@
 (docs.guide), which adds its own templates folder.
 
 Every line says what to order and how far to trust it (:class:`Order`): the maker part with the page its
-MPN was read on, an MPN not verified here, a generic part with the reason no MPN was verified (its shop
-search shown as a search), a part named by its vendor (as the rig description writes it), or a part made from the CAD model.
+MPN was read on (a rig part's maker and MPN are its vendor and part number in config/rig.yaml), an MPN not
+verified here, a candidate the CAD model cannot hold yet (the line's own part is still the rig's
+estimate), a generic part with the reason no MPN was verified (its shop search shown as a search), a
+part named by its vendor (as the rig description writes it), or a part made from the CAD model.
 """
 from __future__ import annotations
 
@@ -54,6 +56,7 @@ def _short(path: str) -> str:
 #: how far to trust what a line says to order, best first
 VERIFIED = "MPN verified"                 # maker part number read on the page in ``source``
 UNVERIFIED = "MPN not verified"           # a maker part number, its page not read here
+CANDIDATE = "candidate: does not fit the CAD model yet"   # chosen, but the rig still describes an estimate
 GENERIC = "generic: no MPN verified"      # a description only; ``source`` says why
 NAMED = "named by its vendor, not verified here"   # vendor and part number as config/rig.yaml or a supply writes them
 MADE = "made from the CAD model"          # printed or machined
@@ -64,9 +67,9 @@ class Order:
     """What one BOM line says to order, and the evidence for it."""
     maker: str
     mpn: str
-    status: str       # one of VERIFIED, UNVERIFIED, GENERIC, NAMED, MADE
+    status: str       # one of VERIFIED, UNVERIFIED, CANDIDATE, GENERIC, NAMED, MADE
     source: str       # the page the MPN was read on, what an unverified MPN rests on, or why a line is generic
-    note: str         # what to check before ordering
+    note: str         # what to check before ordering (a candidate: why it does not fit yet)
     search: bool      # the line's link is a shop search (a generic line only)
     link_read: bool   # the link is the page read for the MPN (as a stored copy); no other link was opened
 
@@ -78,7 +81,11 @@ def order_of(line: Line, entry: CatalogueEntry | None) -> Order:
         return Order(line.vendor, line.part_number, MADE, "", "", False, False)
     if entry.part is not None:
         p = entry.part
-        return Order(p.maker, p.mpn, VERIFIED if p.verified else UNVERIFIED, p.source, p.note or "", search,
+        maker, mpn = p.maker or line.vendor, p.mpn or line.part_number   # a rig part's: config/rig.yaml's
+        if p.candidate is not None:
+            return Order(maker, mpn, CANDIDATE, p.source, " ".join(filter(None, (p.candidate, p.note))), search,
+                         p.verified and line.link == p.source)
+        return Order(maker, mpn, VERIFIED if p.verified else UNVERIFIED, p.source, p.note or "", search,
                      p.verified and line.link == p.source)
     if entry.generic is not None:
         return Order("generic", line.part_number, GENERIC, entry.generic, "", search, False)
@@ -126,7 +133,7 @@ def _link_kind(o: Order) -> str:
 def order_counts(by_key: Mapping[str, Order]) -> dict[str, int]:
     """How many lines have each status (the BOM's summary sentence)."""
     return {status: sum(1 for o in by_key.values() if o.status == status)
-            for status in (VERIFIED, UNVERIFIED, GENERIC, NAMED, MADE)}
+            for status in (VERIFIED, UNVERIFIED, CANDIDATE, GENERIC, NAMED, MADE)}
 
 
 def write_bom(bom: Bom, folder: Path, *, command: str = "bom", site: dict | None = None, env=None) -> list[Path]:
@@ -137,7 +144,8 @@ def write_bom(bom: Bom, folder: Path, *, command: str = "bom", site: dict | None
     ctx.update(bom=bom, node_count=sum(len(ln.nodes) for ln in bom.lines if ln.source == "CAD assembly"),
                site=bool(site), nav=(site or {}).get("nav", []), page="bom.html", orders=by_key,
                order_counts=order_counts(by_key), status=dict(verified=VERIFIED, unverified=UNVERIFIED,
-                                                             generic=GENERIC, named=NAMED, made=MADE))
+                                                             candidate=CANDIDATE, generic=GENERIC, named=NAMED,
+                                                             made=MADE))
     out = []
     for name, text in (("bom.csv", bom_csv(bom, by_key)), ("bom.md", env.get_template("bom.md.j2").render(ctx)),
                        ("bom.html", env.get_template("bom.html.j2").render(ctx)),

@@ -2,7 +2,8 @@
 checks that the switch, fuse, converter and sync trigger fit it.
 
 Every number is read from the rig description (each part's ``power_w``, ``supply_v``, ``output_v``,
-``rating_a``, ``rating_dc_v``, ``efficiency``, ``cutoff_v``, ``sync_input_v`` and ``sync.level_v``); the
+``rating_a``, ``rating_dc_v``, ``efficiency``, ``cutoff_v``, ``sync_input_v``, the converter's
+``dims.input_fuse_max_a`` where its datasheet gives it, and ``sync.level_v``); the
 only constants here are engineering rules (fuse margin, the ATO value series, the Jetson header's 3.3 V
 logic), named below. The battery current is taken at the pack's cut-off voltage: the lowest voltage the
 load sees, so the highest current for the same power.
@@ -113,6 +114,24 @@ def power_checks(rig, counts: Mapping[str, int]) -> list[Result]:
     return out
 
 
+def converter_fuse_check(rig, counts: Mapping[str, int]) -> Result:
+    """The fuse ahead of the converter against what the converter's datasheet asks of its input fuse: no
+    larger than ``dims.input_fuse_max_a`` (the largest slow-blow fuse it recommends). No datasheet read gives
+    the converter's inrush (its peak or I^2t), so the fuse's time-delay class is not checked here: the line
+    says so. A converter that gives no limit passes with a line saying its fuse was not checked against it."""
+    b, cv_id, fu_id = budget(rig, counts), part_of_kind(rig, "converter"), part_of_kind(rig, "fuse")
+    fuse = rig.part(fu_id)
+    fa = fuse.rating_a.value if fuse.rating_a is not None else b.fuse_a
+    limit = rig.part(cv_id).dims.get("input_fuse_max_a")
+    if limit is None:
+        return Result("converter input fuse", True, f"converter {cv_id} gives no input fuse limit "
+                      f"(parts.{cv_id}.dims.input_fuse_max_a): fuse {fu_id} {fa:g} A not checked against it")
+    ok = fa <= limit.value
+    return Result("converter input fuse", ok, f"fuse {fu_id} {fa:g} A {'within' if ok else 'ABOVE'} the "
+                  f"{limit.value:g} A slow-blow fuse converter {cv_id} allows at most ({limit.source}, "
+                  f"{limit.confidence.value}); no inrush figure read: fit a slow-blow (time-delay) fuse")
+
+
 def sync_check(rig) -> Result:
     """The capture card's trigger level (sync.level_v) inside the Boson's external-sync input range."""
     s, boson_id = rig.desc.sync, rig.desc.sensors.thermal.part
@@ -167,4 +186,5 @@ def gland_check(rig) -> Result:
 
 
 def electrical_checks(rig, counts: Mapping[str, int]) -> list[Result]:
-    return power_checks(rig, counts) + [cutoff_check(rig, counts), gland_check(rig), sync_check(rig), led_check(rig)]
+    return power_checks(rig, counts) + [converter_fuse_check(rig, counts), cutoff_check(rig, counts), gland_check(rig),
+                                        sync_check(rig), led_check(rig)]

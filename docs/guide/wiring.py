@@ -56,6 +56,18 @@ def _v(r) -> str:
     return f"{r.min:g} V" if r.min == r.max else f"{r.min:g}-{r.max:g} V"
 
 
+def _named(part) -> str:
+    """The part as the rig description names it: the maker's first word and the part number ("generic" for a
+    part not chosen yet)."""
+    return "generic" if part.vendor.lower() == "generic" else f"{part.vendor.split()[0]} {part.part_number}"
+
+
+def _rating(part) -> str:
+    """A switch's DC rating, from the rig (``rating_a`` at ``rating_dc_v``)."""
+    a, v = part.rating_a, part.rating_dc_v
+    return f"{a.value:g} A at {v.value:g} V DC" if a and v else "DC rating not given"
+
+
 def wiring(rig, counts) -> tuple[list[Block], list[Wire], list[Check]]:
     """Blocks, wires and electrical checks; ``counts`` (part id -> how many, cad.electrical.power_counts)
     gives the power budget the switch and fuse are checked against."""
@@ -76,9 +88,10 @@ def wiring(rig, counts) -> tuple[list[Block], list[Wire], list[Check]]:
               [f"out {_v(bat.output_v)}, cut-off {bud.cutoff_v:g} V"]),
         Block("gland", 30, 110, 230, 40, "cable gland, strain relief (floor)", []),
         Block("fuse", 30, 175, 230, 54, f"fuse {fuse.rating_a.value if fuse.rating_a else '?'} A", [fuse.part_number]),
-        Block("switch", 30, 255, 230, 54, "power switch (DC rated)", [switch.part_number.split(",")[0]]),
+        Block("switch", 30, 255, 230, 54, f"power switch, {_rating(switch)}", [_named(switch)]),
         Block("cutoff", 30, 335, 230, 40, f"under-voltage cut-off at {bud.cutoff_v:g} V", []),
-        Block("converter", 30, 400, 230, 54, "DC-DC converter", [f"in {_v(conv.supply_v)}, out {_v(conv.output_v)}"]),
+        Block("converter", 30, 400, 230, 54, f"DC-DC converter {_v(conv.supply_v)} to {_v(conv.output_v)}",
+              [_named(conv) + (f", {conv.efficiency.value:.0%} eff." if conv.efficiency is not None else "")]),
         Block("card", 370, 40, 300, 90, f"{src.part_number} (capture card)",
               ["GMSL2 camera ports", f"{s.connector}: trigger out, pin {s.signal_pin} signal, pin {s.ground_pin} GND"]),
         Block("orin", 370, 200, 300, 290, "Jetson AGX Orin devkit",

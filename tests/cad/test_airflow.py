@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from cad.airflow import (AGREE_ABS_MM2, AGREE_REL, Window, _wall_axis, air_paths, first_hits, stl_free_area_mm2)
-from cad.geom import Bounds
+from cad.geom import Bounds, placed_bounds
 
 trimesh = pytest.importorskip("trimesh")
 
@@ -104,10 +104,8 @@ def test_vents_miss_the_pads_lugs_and_controls_and_print_along_their_bridges(lay
     from cad.layout.case import lug_bounds
     case = lay.case
     blockers = list(lay.handles.pads) + [lug_bounds(case, lay.c, lay.fits, x, s) for x, s in case.lugs]
-    for name, (part, pose) in lay.controls.items():
-        c = np.asarray(pose.t)
-        r = max(part.cutout_mm) / 2 + lay.fits.min_wall
-        blockers.append(Bounds(tuple(c - r), tuple(c + r)))
+    for name, (part, pose) in lay.controls.items():   # each control's own body and bezel, a wall round it
+        blockers.append(placed_bounds(part.bounds(), pose).grown(lay.fits.min_wall))
     v_rig = lay.rig.desc.enclosure.vents
     for v in case.vents:
         plane = sorted(v.size[k] for k in range(3) if k != _wall_axis(v, case.outer))

@@ -45,3 +45,40 @@ def test_sync_level_outside_the_boson_input_fails():
 def test_5v_led_on_the_3v3_gpio_fails():
     res = _by_name(load_rig(overrides=["parts.record_button.supply_v.min=4.5", "parts.record_button.supply_v.max=5.5"]))
     assert not res["button LED voltage"].ok
+
+
+def _rig_with_converter_fuse_limit(tmp_path, rig_text, limit_a):
+    """config/rig.yaml with a datasheet input-fuse limit on the converter (parts.dc_converter.dims), as the
+    TEP 150WI's page gives one; the file is edited as text so the loader reads it as a user's file."""
+    import yaml
+    data = yaml.safe_load(rig_text)
+    data["parts"]["dc_converter"].setdefault("dims", {})["input_fuse_max_a"] = {
+        "value": limit_a, "source": "estimate", "confidence": "estimate"}
+    path = tmp_path / "rig.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return load_rig(path)
+
+
+def test_fuse_against_the_converters_input_fuse_limit(tmp_path, rig_text):
+    """A converter whose datasheet caps its input fuse: the rig's fuse passes under the cap and fails above
+    it; every other check is unchanged. Without a cap the line says the fuse was not checked against it."""
+    fuse_a = load_rig().part("blade_fuse").rating_a.value
+    ok = _by_name(_rig_with_converter_fuse_limit(tmp_path, rig_text, 4 * fuse_a))
+    assert ok["converter input fuse"].ok and "slow-blow" in ok["converter input fuse"].text
+    low = _by_name(_rig_with_converter_fuse_limit(tmp_path, rig_text, fuse_a / 2))
+    assert not low["converter input fuse"].ok and "ABOVE" in low["converter input fuse"].text
+    assert all(r.ok for n, r in low.items() if n != "converter input fuse")
+    plain = _by_name(load_rig())["converter input fuse"]
+    dims = load_rig().part("dc_converter").dims
+    assert ("not checked" in plain.text) == ("input_fuse_max_a" not in dims)
+
+
+def test_efficiency_sets_the_battery_current():
+    """The battery draws the load through the converter's efficiency (parts.dc_converter.efficiency): a less
+    efficient converter draws more from the pack, in proportion."""
+    rig = load_rig()
+    eff = rig.part("dc_converter").efficiency.value
+    worse = load_rig(overrides=[f"parts.dc_converter.efficiency.value={eff * 0.8}"])
+    a, b = budget(rig, COUNTS), budget(worse, COUNTS)
+    assert b.load_w == pytest.approx(a.load_w)
+    assert b.battery_w == pytest.approx(a.battery_w / 0.8) and b.battery_a == pytest.approx(a.battery_a / 0.8)

@@ -106,3 +106,154 @@ def test_electrical_fails_a_bad_gland_or_cutoff(override, name):
 
 def test_default_gland_grips_the_lead():
     assert gland_check(load_rig()).ok
+
+
+# ------------------------------------------------------------------ the real switch and the converter's screws
+def _stl_mesh(asm, node: str, tmp_path):
+    """A node's exported STL read back by trimesh: the geometry as a print service gets it."""
+    import cadquery as cq
+    import trimesh
+    path = tmp_path / f"{node}.stl"
+    cq.exporters.export(asm.node(node).shape(asm.cache), str(path), "STL", tolerance=0.01, angularTolerance=0.05)
+    return trimesh.load(str(path))
+
+
+def _loop_around(mesh, origin, normal, centre_uv, axes):
+    """The smallest closed loop of the section of ``mesh`` by the plane through ``origin`` with ``normal``
+    that encloses ``centre_uv``, in the plane's (u, v) coordinates along ``axes``: the hole there. The
+    section's segments (trimesh.intersections.mesh_plane) are joined into loops by their shared ends."""
+    import trimesh
+    seg = trimesh.intersections.mesh_plane(mesh, np.asarray(normal, float), np.asarray(origin, float))
+    assert len(seg), "the plane misses the part"
+    uv = np.stack([seg @ np.asarray(axes[0], float), seg @ np.asarray(axes[1], float)], axis=-1)   # (n, 2, 2)
+    keys = np.round(uv.reshape(-1, 2), 4)
+    _, ids = np.unique(keys, axis=0, return_inverse=True)
+    parent = list(range(ids.max() + 1))
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+    for a, b in ids.reshape(-1, 2):
+        parent[find(a)] = find(b)
+    roots = np.array([find(i) for i in ids.reshape(-1, 2)[:, 0]])
+    best = None
+    for r in set(roots.tolist()):
+        pts = uv[roots == r].reshape(-1, 2)
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        if np.all(lo < centre_uv) and np.all(centre_uv < hi):
+            area = float(np.prod(hi - lo))
+            if best is None or area < best[0]:
+                best = (area, pts)
+    assert best is not None, f"no loop of the section encloses {centre_uv}"
+    return best[1]
+
+
+def _inside(mesh, pts, chunk=8):
+    """Which ``pts`` lie inside the closed ``mesh``: its generalised winding number (the solid angle its
+    triangles subtend, Van Oosterom and Strackee, over 4 pi) is 1 inside, 0 outside. No ray caster, no
+    broad phase: every triangle counts."""
+    tri = np.asarray(mesh.triangles, float)
+    out = np.zeros(len(pts), bool)
+    for k in range(0, len(pts), chunk):
+        p = np.asarray(pts[k:k + chunk], float)[:, None, None, :]
+        a, b, c = (tri[None, :, i, :] - p[:, :, 0, :] for i in range(3))
+        la, lb, lc = (np.linalg.norm(v, axis=-1) for v in (a, b, c))
+        num = np.einsum("ptk,ptk->pt", a, np.cross(b, c))
+        den = la * lb * lc + np.einsum("ptk,ptk->pt", a, b) * lc + np.einsum("ptk,ptk->pt", b, c) * la \
+            + np.einsum("ptk,ptk->pt", c, a) * lb
+        w = 2 * np.arctan2(num, den).sum(axis=1) / (4 * np.pi)
+        out[k:k + chunk] = np.abs(w) > 0.5
+    return out
+
+
+def test_switch_cutout_is_the_datasheets_hole(asm, rig, tmp_path):
+    """The lid's hole for the Carling L-Series, sectioned mid-wall on the exported STL (trimesh, not the
+    B-rep the CAD model cut it from): no smaller than the datasheet's 44.0 x 22.0 mm even if the printer
+    shrinks it by its tolerance on each side, and no more than 1 mm larger (the snap-in's latches must bite)."""
+    mesh = _stl_mesh(asm, "case_lid", tmp_path)
+    _, pose = asm.layout.controls["power_switch"]
+    o, wall = asm.layout.case.outer, asm.layout.fits.wall
+    _, y, z = pose.t
+    loop = _loop_around(mesh, (o.lo[0] + wall / 2, 0, 0), (1, 0, 0), (y, z), ((0, 1, 0), (0, 0, 1)))
+    assert len(loop) >= 4
+    width, height = np.ptp(loop[:, 0]), np.ptp(loop[:, 1])
+    tol = rig.desc.printing.printer.tolerance_mm
+    for got, want in ((width, rig.dim("power_switch", "cutout_width_mm")),
+                      (height, rig.dim("power_switch", "cutout_height_mm"))):
+        assert want + 2 * tol <= got <= want + 1.0, (got, want)
+    # centred on the switch's pose: the body behind it is where the model says
+    assert (loop[:, 0].min() + loop[:, 0].max()) / 2 == pytest.approx(y, abs=0.05)
+    assert (loop[:, 1].min() + loop[:, 1].max()) / 2 == pytest.approx(z, abs=0.05)
+
+
+def test_switch_is_clear_of_every_part(asm, tmp_path):
+    """Points sampled inside the switch's exported mesh lie inside no other part's mesh (a winding-number
+    inside test on the STL triangles, beside the interference check's B-rep common volumes): its body behind
+    the lid's rear wall clears the devkit, the capture card and the antenna beside it, its neck passes the
+    wall's hole."""
+    sw = _stl_mesh(asm, "power_switch", tmp_path)
+    assert sw.is_watertight
+    lo, hi = sw.bounds
+    g = np.stack(np.meshgrid(*[np.linspace(a + 0.2, b - 0.2, 10) for a, b in zip(lo, hi)]), -1).reshape(-1, 3)
+    pts = g[_inside(sw, g)]
+    assert len(pts) > 200
+    checked = []
+    for n in asm.nodes:
+        if n.name == "power_switch" or n.category == "fastener":
+            continue
+        bb = n.shape(asm.cache).BoundingBox()
+        if np.any(np.array([bb.xmax, bb.ymax, bb.zmax]) < lo) or np.any(np.array([bb.xmin, bb.ymin, bb.zmin]) > hi):
+            continue
+        other = _stl_mesh(asm, n.name, tmp_path)
+        inside = _inside(other, pts)
+        assert not inside.any(), f"{n.name} holds {int(inside.sum())} points of the switch"
+        checked.append(n.name)
+    assert "case_lid" in checked      # the wall it stands in was tested, not skipped
+
+
+def test_a_switch_over_the_devkit_is_raised_clear_of_it(asm):
+    """Its body reaches in over the devkit from the rear wall: it stands above the devkit's top by the
+    clearance (placed, not by luck: at the lid's mid height it would cut into the devkit)."""
+    lay = asm.layout
+    sw, pose = lay.controls["power_switch"]
+    from cad.geom import placed_bounds
+    body, orin = placed_bounds(sw.body_bounds(), pose), lay.compute.orin_box
+    assert body.lo[0] < orin.lo[0] < body.hi[0]                     # it does reach in over the devkit
+    assert body.lo[1] < orin.lo[1] + 20                              # beside its edge, over its footprint
+    assert body.lo[2] >= orin.hi[2] + lay.fits.clear - 1e-6
+    mid = (lay.case.split_z + lay.case.interior.hi[2]) / 2
+    assert mid - sw.size[2] / 2 < orin.hi[2]                         # the lid's mid height would not have cleared it
+
+
+def test_converter_screws_cross_the_wall_at_its_mounting_holes(asm, rig, tmp_path):
+    """The right wall of the exported tray, sectioned mid-wall (trimesh): a round hole at each of the
+    converter's mounting positions (parts.dc_converter.mounting, through its pose), and the screws the joints
+    drive through them."""
+    p = asm.layout.power
+    mesh = _stl_mesh(asm, "case_lower", tmp_path)
+    wall = asm.layout.fits.wall
+    y_mid = asm.layout.case.outer.lo[1] + wall / 2
+    holes = p.converter.mount_points()
+    assert holes
+    for pt in holes:
+        c = p.converter_pose.apply(np.array(pt))
+        loop = _loop_around(mesh, (0, y_mid, 0), (0, 1, 0), (c[0], c[2]), ((1, 0, 0), (0, 0, 1)))
+        assert len(loop) > 12, f"no hole at {c}"
+        r = np.hypot(loop[:, 0] - c[0], loop[:, 1] - c[2])
+        assert r.max() - r.min() < 0.1 and 1.0 < r.mean() < 2.5, (c, r.min(), r.max())   # a round M3 hole on it
+    screws = [n for n in asm.nodes if n.name.startswith("screw_converter_")]
+    assert len(screws) == len(holes)
+
+
+def test_a_bezel_too_tall_for_the_lid_is_one_line_naming_its_key():
+    """A switch whose bezel cannot stand in the lid's rear wall once raised over the devkit: the layout is
+    refused with the rig key and the roof edge it runs into (exit 2 through the commands), not a clash."""
+    from cad.layout import DesignError, layout
+    rig = load_rig(overrides=["parts.power_switch.dims.bezel_height_mm.value=60"])
+    with pytest.raises(DesignError) as e:
+        layout(rig)
+    text = str(e.value)
+    assert "parts.power_switch.dims.bezel_height_mm: the 60 mm bezel" in text and "roof edge" in text, text
+    assert len(text.splitlines()) == 1, text
+    layout(load_rig(overrides=["parts.power_switch.dims.bezel_height_mm.value=30"]))   # a little taller still fits
