@@ -16,11 +16,13 @@
    each tree's cache); samples/s end to end (wall clock, indexing included) and the ratios, and the CPU seconds
    of each run (the command and its workers: what a shared machine's other load disturbs least); then every file
    of each previous output compared with this tree's (bytes; PNGs that differ are decoded and compared). Each
-   run's 1-minute load average, as it starts, is printed beside it (the machine may be shared).
+   run's 1-minute load average, as it starts, is printed beside it (the machine may be shared). ``--fork`` runs
+   this tree a second time with its workers forked (``PLATFORM_TOOLS_EXPORT_WORKERS=fork``) as ``new-fork``.
    A full-size recording: ``platform_tools simulate-rig --out DIR --duration 12 --scale 1``.
 
 One core for 1 and 2: numba, OpenCV and BLAS are pinned to one thread before they load.
-Run: .venv/bin/python bench/bench_dataset.py [--frames N] [--json] [--export RECORDING [--rate HZ] [--repeats N]]
+Run: .venv/bin/python bench/bench_dataset.py [--frames N] [--json] [--export RECORDING [--rate HZ] [--repeats N]
+     [--fork]]
 """
 from __future__ import annotations
 
@@ -94,7 +96,8 @@ def previous_tree(tmp: Path, rev: str = BASELINE) -> Path:
     return tree
 
 
-def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int) -> tuple[float, int, float, float]:
+def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int,
+               extra_env: dict | None = None) -> tuple[float, int, float, float]:
     """(wall seconds, samples, CPU seconds, the 1-minute load average as it starts) of one `platform_tools export`
     run with ``tree``'s code. The CPU time
     (user + system, of the command and its workers: getrusage of reaped children) is the figure a shared machine
@@ -105,8 +108,9 @@ def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int
     shutil.rmtree(out, ignore_errors=True)
     ru = resource.getrusage(resource.RUSAGE_CHILDREN)
     env = dict(os.environ, PYTHONPATH=str(tree))
-    for var in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    for var in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", FORK_ENV):
         env.pop(var, None)
+    env |= extra_env or {}
     cmd = [sys.executable, "-c", "import sys; from platform_tools.cli.main import main; sys.exit(main())",
            "export", str(recording), "--out", str(out), "--rate", str(rate), "--workers", str(workers),
            "--json", "-q"]
@@ -138,29 +142,40 @@ def compare_outputs(a: Path, b: Path) -> dict:
     return res
 
 
-def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, revs=(BASELINE,)) -> dict:
+#: this tree's export with its workers forked (platform_tools.dataset.engines.START_ENV), run as "new-fork" by --fork
+FORK_ENV = "PLATFORM_TOOLS_EXPORT_WORKERS"
+
+
+def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, revs=(BASELINE,),
+                 fork: bool = False) -> dict:
+    """``fork``: this tree a second time with its workers forked ("new-fork"), each run beside the others."""
     import tempfile
     with tempfile.TemporaryDirectory(prefix="bench-export-") as tmp:
         tmp = Path(tmp)
-        trees = {rev: previous_tree(tmp, rev) for rev in revs} | {"new": REPO}
-        for name, tree in trees.items():          # warm-up: numba compiles into each tree's cache
-            run_export(tree, recording, tmp / f"warm-{name}", max(rate / 4, 0.25), workers)
+        trees = {rev: (previous_tree(tmp, rev), {}) for rev in revs} | {"new": (REPO, {})}
+        if fork:
+            trees["new-fork"] = (REPO, {FORK_ENV: "fork"})
+        for name, (tree, env) in trees.items():          # warm-up: numba compiles into each tree's cache
+            run_export(tree, recording, tmp / f"warm-{name}", max(rate / 4, 0.25), workers, env)
         times = {n: [] for n in trees}
         cpu = {n: [] for n in trees}
         loads = {n: [] for n in trees}
         samples = {}
         for _ in range(repeats):
-            for name, tree in trees.items():
-                dt, samples[name], c, load = run_export(tree, recording, tmp / f"out-{name}", rate, workers)
+            for name, (tree, env) in trees.items():
+                dt, samples[name], c, load = run_export(tree, recording, tmp / f"out-{name}", rate, workers, env)
                 times[name].append(dt)
                 cpu[name].append(c)
                 loads[name].append(load)
         sps = {n: samples[n] / min(t) for n, t in times.items()}
+        ours = [n for n in trees if n.startswith("new")]
         return {"recording": str(recording), "rate_hz": rate, "workers": workers, "samples": samples,
                 "seconds": times, "samples_per_s": sps, "cpu_seconds": cpu, "load_average": loads,
-                "ratio": {rev: sps["new"] / sps[rev] for rev in revs},
-                "cpu_ratio": {rev: min(cpu[rev]) * samples["new"] / (min(cpu["new"]) * samples[rev]) for rev in revs},
-                "outputs": {rev: compare_outputs(tmp / f"out-{rev}", tmp / "out-new") for rev in revs}}
+                "ratio": {f"{n} / {rev}": sps[n] / sps[rev] for n in ours for rev in revs},
+                "cpu_ratio": {f"{n} / {rev}": min(cpu[rev]) * samples[n] / (min(cpu[n]) * samples[rev])
+                              for n in ours for rev in revs},
+                "outputs": {f"{n} / {rev}": compare_outputs(tmp / f"out-{rev}", tmp / f"out-{n}")
+                            for n in ours for rev in revs}}
 
 
 def main(argv=None) -> int:
@@ -172,10 +187,13 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=2, help="with --export: timed runs of each (default 2; best kept)")
     ap.add_argument("--previous", action="append", metavar="REV",
                     help=f"with --export: the git revision of the previous code (repeatable; default {BASELINE})")
+    ap.add_argument("--fork", action="store_true",
+                    help=f"with --export: also this tree with its workers forked ({FORK_ENV}=fork), as new-fork")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     if args.export:
-        r = bench_export(args.export, args.rate, args.repeats, revs=tuple(args.previous or (BASELINE,)))
+        r = bench_export(args.export, args.rate, args.repeats, revs=tuple(args.previous or (BASELINE,)),
+                         fork=args.fork)
         if args.json:
             print(json.dumps(r, indent=2))
             return 0
@@ -186,14 +204,15 @@ def main(argv=None) -> int:
                   f"{r['samples_per_s'][n]:6.2f} samples/s  (runs: {', '.join(f'{t:.1f}' for t in r['seconds'][n])} s;"
                   f" CPU {', '.join(f'{t:.1f}' for t in r['cpu_seconds'][n])} s; load average "
                   f"{', '.join(f'{t:.1f}' for t in r['load_average'][n])})")
-        for rev, ratio in r["ratio"].items():
-            o = r["outputs"][rev]
-            print(f"  ratio new / {rev}: {ratio:.2f}x in samples/s (wall clock), {r['cpu_ratio'][rev]:.2f}x in "
+        for pair, ratio in r["ratio"].items():
+            o = r["outputs"][pair]
+            ours, rev = pair.split(" / ")
+            print(f"  ratio {pair}: {ratio:.2f}x in samples/s (wall clock), {r['cpu_ratio'][pair]:.2f}x in "
                   f"samples per CPU second")
             print(f"    outputs: {o['files']} files, {o['identical_bytes']} identical bytes, {len(o['same_pixels'])} "
                   f"PNGs with other bytes but the same pixels, {len(o['different'])} different "
                   f"({', '.join(o['different'][:5])}), only in {rev} {len(o['only_in_previous'])} "
-                  f"({', '.join(o['only_in_previous'][:3])}), only in new {len(o['only_in_new'])} "
+                  f"({', '.join(o['only_in_previous'][:3])}), only in {ours} {len(o['only_in_new'])} "
                   f"({', '.join(o['only_in_new'][:3])})")
         return 0
     rig = load_rig()

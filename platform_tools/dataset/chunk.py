@@ -17,6 +17,7 @@ from . import encode, thermal8
 from .calib import FRAME_OF, model_from_dict, rt_a_b
 from .decode import IMAGE_STREAMS, iter_frames
 from .recording import THERMAL, RecordingError
+from .workers import keep_freed_memory
 
 _registrars: dict = {}
 _rays: dict = {}
@@ -113,24 +114,22 @@ def _read(task: dict) -> dict[int, dict[str, np.ndarray]]:
 
 
 def warm_up() -> None:
-    """Make this process ready for :func:`process_chunk` before its first task (engines.Pool runs it in each worker
-    as it starts): the numba kernels of the 8-bit conversion and the registration loaded, mrcal and the MCAP
-    reader imported."""
+    """Make this process ready for :func:`process_chunk` before its first task (engines.Pool runs it once, in the
+    process its workers are forked from, or in each spawned worker): the numba kernels of the 8-bit conversion and
+    the registration loaded, mrcal and the MCAP reader imported. No OpenCV call (a thread pool OpenCV started
+    would not survive a fork)."""
     import mcap.reader  # noqa: F401
     import mcap_ros2.decoder  # noqa: F401
 
     from . import register
-    # any parameters do: the kernel's argument types (what numba specialises on) do not depend on them
-    any_params = thermal8.Params(percentile_low=1, percentile_high=99, clahe_clip_limit=2.0, clahe_tile_grid=2,
-                                 bilateral_d=3, bilateral_sigma_color=20, bilateral_sigma_space=15,
-                                 clip_above_counts=35000)
-    thermal8.to_8bit(np.arange(64, dtype=np.uint16).reshape(8, 8), any_params)
+    thermal8.warm_up()
     register.warm_up()
 
 
 def process_chunk(task: dict) -> list[dict]:
     """Decode, convert, register and write one chunk of samples; return their index rows."""
     cv2.setNumThreads(1)
+    keep_freed_memory()
     out = Path(task["out"])
     rec = task["recording"]
     rec_dir = out / rec

@@ -9,6 +9,7 @@ and ``finished(task, result)`` in this process as each one ends, in any order. `
 from __future__ import annotations
 
 import contextlib
+import sys
 
 from platform_tools.rig.progress import progress
 
@@ -32,23 +33,47 @@ def run_inline(work, tasks, finished, workers, scheduler, pool=None) -> None:
 MANAGER_JOIN_S = 10.0
 
 
-class Pool:
-    """A process pool of spawned workers that end with this process (workers.die_with_parent), started at once:
-    each worker runs ``warm_up`` (imports, numba's kernels loaded) as soon as it exists, so that its start-up
-    (about 3 s of CPU at full size, docs/dataset.md "Speed") overlaps what this process does before the first task
-    (indexing the recordings) instead of following it. :meth:`run` runs tasks; :meth:`close` ends the workers."""
+#: how the pool's workers start (this variable, read when a pool starts): "spawn" (the default), each worker a
+#: fresh interpreter running the warm-up itself, or "fork" (Linux), the warm-up run once here and the workers forked
+#: from this process after it, sharing what it loaded (imports, numba's kernels: about 0.7 s of CPU per spawned
+#: worker at full size, docs/dataset.md "Speed")
+START_ENV = "PLATFORM_TOOLS_EXPORT_WORKERS"
+START_METHODS = ("spawn", "fork")
 
-    def __init__(self, workers: int, warm_up=None):
+
+def start_method() -> str:
+    """The workers' start method START_ENV asks for ("spawn" when unset); an unknown value is one line."""
+    import os
+    method = os.environ.get(START_ENV) or "spawn"
+    if method not in START_METHODS:
+        raise EngineError(f"{START_ENV}={method}: expected {' or '.join(START_METHODS)}")
+    if method == "fork" and not sys.platform.startswith("linux"):
+        raise EngineError(f"{START_ENV}=fork: workers are forked on Linux only; leave it unset (spawn)")
+    return method
+
+
+class Pool:
+    """A process pool of workers that end with this process (workers.die_with_parent), started at once and warm:
+    ``warm_up`` (imports, numba's kernels loaded; no OpenCV call) runs in each spawned worker as it starts, while
+    this process indexes the recordings, or (``method`` "fork", :func:`start_method`) once here, the workers forked
+    after it. :meth:`run` runs tasks; :meth:`close` ends the workers."""
+
+    def __init__(self, workers: int, warm_up=None, method: str | None = None):
         import multiprocessing
         import os
         from concurrent.futures import ProcessPoolExecutor
-        ctx = multiprocessing.get_context("spawn")     # no fork of a process holding numba / threads
+        method = method or start_method()
+        ctx = multiprocessing.get_context(method)
         self._before = set(multiprocessing.active_children())
-        self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_start_worker,
-                                         initargs=(os.getpid(), warm_up))
+        forked = method == "fork"
         self._closed = False
-        with _worker_environment():
-            for _ in range(workers):    # the executor spawns a process per submission while none is idle: all now
+        with _worker_environment(), (_opencv_single_threaded() if forked else contextlib.nullcontext()):
+            if forked and warm_up is not None:
+                with stdlib_distutils():
+                    _warm(warm_up)          # once, here: the forked workers inherit what it loaded
+            self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_start_worker,
+                                             initargs=(os.getpid(), None if forked else warm_up))
+            for _ in range(workers):    # all started now (a forking executor starts them all at the first)
                 self._pool.submit(_nothing)
 
     def run(self, work, tasks, finished) -> None:
@@ -96,9 +121,9 @@ def _nothing() -> None:
     return None
 
 
-#: the environment a spawned worker starts with, beyond this process's: setuptools' documented switch to the
-#: standard library's distutils. mrcal's numpysane imports distutils.version; in a virtualenv setuptools' import
-#: hook otherwise answers with setuptools' own copy, importing setuptools (0.4 s of CPU per process, measured)
+#: the environment the warm-up runs in and a worker starts with, beyond this process's: setuptools' documented switch
+#: to the standard library's distutils. mrcal's numpysane imports distutils.version; in a virtualenv setuptools'
+#: import hook otherwise answers with setuptools' own copy, importing setuptools (0.4 s of CPU per process, measured)
 WORKER_ENVIRONMENT = {"SETUPTOOLS_USE_DISTUTILS": "stdlib"}
 
 
@@ -116,16 +141,51 @@ def _worker_environment():
             os.environ.pop(k, None)
 
 
+def _warm(warm_up) -> None:
+    """Run a warm-up; one that fails is only a missed head start: the task that needs what it loads fails with the
+    real error."""
+    try:
+        warm_up()
+    except Exception:           # noqa: BLE001 - see the docstring
+        pass
+
+
+@contextlib.contextmanager
+def stdlib_distutils():
+    """setuptools' distutils finder (installed at start-up unless SETUPTOOLS_USE_DISTUTILS=stdlib) out of the import
+    path for the block: what WORKER_ENVIRONMENT does for a spawned process, for imports in this one (mrcal's, through
+    numpysane), where the variable is read too late to count: importing mrcal then costs about 0.1 s of CPU instead
+    of 0.2 s. A process that imports setuptools later gets its distutils then, as setuptools replaces an already
+    imported one itself."""
+    hooks = [f for f in sys.meta_path if type(f).__module__ == "_distutils_hack"]
+    for f in hooks:
+        sys.meta_path.remove(f)
+    try:
+        yield
+    finally:
+        sys.meta_path[:0] = [f for f in hooks if f not in sys.meta_path]
+
+
+@contextlib.contextmanager
+def _opencv_single_threaded():
+    """OpenCV's thread pool stopped (``cv2.setNumThreads(1)`` joins its threads) while workers are forked, then set
+    back: a forked child holds only the forking thread, and an OpenCV whose pool threads are gone would wait for
+    them. (OpenBLAS, the other library here with threads, handles fork itself.)"""
+    import cv2
+    n = cv2.getNumThreads()
+    cv2.setNumThreads(1)
+    try:
+        yield
+    finally:
+        cv2.setNumThreads(n)
+
+
 def _start_worker(parent_pid: int, warm_up) -> None:
-    """The pool's initializer: end with the parent, then get ready for work. A warm-up that fails is only a missed
-    head start: the task that needs what it loads fails with the real error."""
+    """The pool's initializer: end with the parent, then (a spawned worker) get ready for work."""
     from .workers import die_with_parent
     die_with_parent(parent_pid)
     if warm_up is not None:
-        try:
-            warm_up()
-        except Exception:           # noqa: BLE001 - see the docstring
-            pass
+        _warm(warm_up)
 
 
 @contextlib.contextmanager

@@ -46,7 +46,7 @@ from . import card, thermal8
 from .calib import CalibrationError, at_recorded_size, for_recording, load_calibration, model_to_dict, zed_right
 from .chunk import KINDS, TMP_SUFFIX, process_chunk, warm_up
 from .decode import IMAGE_STREAMS, probe_sizes
-from .engines import ENGINES, EngineError, started
+from .engines import ENGINES, EngineError, start_method, started, stdlib_distutils
 from .pairing import plan
 from .recording import RecordingError, open_recording, telemetry_rows
 from .stereo import BUILT_IN, StereoError, load_plugin
@@ -205,6 +205,13 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
     ``topic_map``: a :class:`.layout.Layout` (``--topics``) instead of the detected layout; ``command``: the
     command line, for the dataset card. A pool's workers start (and load their kernels) while the recordings
     are indexed (engines.started)."""
+    if engine == "pool" and workers > 1:
+        try:
+            start_method()
+        except EngineError as exc:
+            raise ExportError(str(exc)) from None
+    with stdlib_distutils():
+        import mrcal  # noqa: F401 - the calibration's, imported without setuptools (engines.stdlib_distutils)
     with started(engine, workers, warm_up) as pool:
         return _export(recordings, out, rig, params, calibration=calibration, engine=engine, workers=workers,
                        scheduler=scheduler, recover=recover, on_chunk=on_chunk, topic_map=topic_map,

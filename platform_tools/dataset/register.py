@@ -115,8 +115,9 @@ def _points_compact(depth, rays, R, t, kind, k, qext, out_w, out_h, uvz, idx):
 @numba.njit(cache=True)
 def _splat_packed(uvz, idx, n, src, out_h, out_w, tol, zbuf, packed):
     """The two passes over the ``n`` points in view: pass 0 into the z-buffer ``zbuf`` (h, w; +inf on entry), pass 1
-    into ``packed`` (h, w, C + 2; 0 on entry): the C colour sums, the weight sum, the weighted depth sum of each
-    pixel side by side. The same additions in the same order as three separate arrays: the same sums to the bit."""
+    into ``packed`` (h, w, C + 2; 0 on entry, C-contiguous): the C colour sums, the weight sum, the weighted depth
+    sum of each pixel side by side. The same additions in the same order as three separate arrays: the same sums to
+    the bit. Three colours (the export's BGR) go through :func:`_blend3`."""
     C = src.shape[1]
     for j in range(n):                      # pass 0: the z-buffer
         u = uvz[j, 0]
@@ -128,6 +129,9 @@ def _splat_packed(uvz, idx, n, src, out_h, out_w, tol, zbuf, packed):
             uu, vv, w = _corner(u0, v0, u - u0, v - v0, corner)
             if 0 <= vv < out_h and 0 <= uu < out_w and w > 0.0 and z < zbuf[vv, uu]:
                 zbuf[vv, uu] = z
+    if C == 3:
+        _blend3(uvz, idx, n, src, out_h, out_w, tol, zbuf, packed.reshape(out_h * out_w * 5))
+        return
     for j in range(n):                      # pass 1: the surface nearest each pixel blends
         u = uvz[j, 0]
         v = uvz[j, 1]
@@ -142,6 +146,33 @@ def _splat_packed(uvz, idx, n, src, out_h, out_w, tol, zbuf, packed):
                     packed[vv, uu, ch] += w * src[i, ch]
                 packed[vv, uu, C] += w
                 packed[vv, uu, C + 1] += w * z
+
+
+@numba.njit(cache=True, inline="always")
+def _blend3(uvz, idx, n, src, out_h, out_w, tol, zbuf, flat):
+    """Pass 1 of :func:`_splat_packed` for three colours, into its accumulator flattened (``flat``: h * w * 5): each
+    point's colour read once, a corner's five sums at one computed offset. The same products and additions in the
+    same order as the general loop (the whole splat 1.2 to 1.25 times faster, docs/dataset.md "Speed")."""
+    row = out_w * 5
+    for j in range(n):
+        u = uvz[j, 0]
+        v = uvz[j, 1]
+        z = uvz[j, 2]
+        u0 = int(np.floor(u))
+        v0 = int(np.floor(v))
+        i = idx[j]
+        b = np.float64(src[i, 0])
+        g = np.float64(src[i, 1])
+        r = np.float64(src[i, 2])
+        for corner in range(4):
+            uu, vv, w = _corner(u0, v0, u - u0, v - v0, corner)
+            if 0 <= vv < out_h and 0 <= uu < out_w and w > 0.0 and z <= zbuf[vv, uu] * (1.0 + tol):
+                p = vv * row + uu * 5
+                flat[p] += w * b
+                flat[p + 1] += w * g
+                flat[p + 2] += w * r
+                flat[p + 3] += w
+                flat[p + 4] += w * z
 
 
 @dataclass

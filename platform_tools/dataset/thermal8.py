@@ -101,6 +101,13 @@ def _kernel():
     return _compiled[0]
 
 
+def warm_up() -> None:
+    """Load :func:`_apply`'s kernel with the argument types :func:`to_8bit_minmax` passes (uint16 counts, uint8
+    lookup table and output, int bounds), and nothing else: no OpenCV call, so no OpenCV thread is started in a
+    process that forks the export's workers after warming up (engines.Pool)."""
+    _kernel()(np.zeros(4, np.uint16), np.zeros(2, np.uint8), 0, 1, np.empty(4, np.uint8))
+
+
 def to_8bit(raw: np.ndarray, p: Params) -> tuple[np.ndarray, dict]:
     """The paper's 8-bit image of a raw frame, and what was used (lo, hi counts, whether clipped)."""
     img, (lo, hi, clipped) = to_8bit_minmax(raw, p)

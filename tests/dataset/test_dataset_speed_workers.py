@@ -1,6 +1,8 @@
 """The export's workers start before the work is known (engines.started) and are ready when it comes: numba's kernels
 loaded by chunk.warm_up with the argument types of the real call (no second specialisation), mrcal imported with the
-standard library's distutils; an exception in the block stops them. Checked in real spawned processes."""
+standard library's distutils; on Linux the warm-up runs once and the workers are forked from it; an exception in the
+block stops them; a process running chunks reuses the memory it frees (workers.keep_freed_memory). Checked in real
+processes."""
 from __future__ import annotations
 
 import json
@@ -40,20 +42,75 @@ def _alive(pid: int) -> bool:
         return False
 
 
-def test_started_workers_are_warm_before_their_first_task():
-    got = []
-    before = os.environ.get("SETUPTOOLS_USE_DISTUTILS")
-    children = set(multiprocessing.active_children())
-    with engines.started("pool", 2, warm_up) as pool:
-        spawned = [p.pid for p in multiprocessing.active_children() if p not in children]
-        assert pool is not None and len(spawned) == 2       # both workers exist before any task is submitted
-        assert os.environ.get("SETUPTOOLS_USE_DISTUTILS") == before       # this process's environment as it was
-        engines.run_pool(_state, [None] * 6, lambda t, r: got.append(r), 2, None, pool)
-    assert len(got) == 6 and {g["pid"] for g in got} <= set(spawned)
-    for g in got:
+#: run in a fresh interpreter (as the export command's process is: no setuptools, no OpenCV threads): start a pool
+#: with a warm-up that records where it ran, run _state as 6 tasks, print what was seen
+_POOL = (
+    "import functools, json, multiprocessing, os, sys\n"
+    "from platform_tools.dataset import engines\n"
+    "from tests.dataset.test_dataset_speed_workers import _state, _warm_noting\n"
+    "warm = functools.partial(_warm_noting, sys.argv[1])\n"
+    "got = []\n"
+    "before = os.environ.get('SETUPTOOLS_USE_DISTUTILS')\n"
+    "with engines.started('pool', 2, warm) as pool:\n"
+    "    workers = [p.pid for p in multiprocessing.active_children()]\n"
+    "    env_after = os.environ.get('SETUPTOOLS_USE_DISTUTILS')\n"
+    "    engines.run_pool(_state, [None] * 6, lambda t, r: got.append(r), 2, None, pool)\n"
+    "print(json.dumps({'parent': os.getpid(), 'workers': workers, 'got': got, 'env': [before, env_after],\n"
+    "                  'parent_setuptools': 'setuptools' in sys.modules,\n"
+    "                  'method': engines.start_method()}))\n")
+
+
+def _warm_noting(where: str) -> None:
+    """chunk.warm_up, then this process's pid appended to the file ``where``."""
+    warm_up()
+    with open(where, "a") as f:
+        f.write(f"{os.getpid()}\n")
+
+
+def _pool_run(tmp_path, method: str | None = None) -> tuple[dict, list[int]]:
+    """(what _POOL printed, the pids the warm-up ran in); ``method``: engines.START_ENV set to it."""
+    where = tmp_path / "warmed"
+    env = {k: v for k, v in os.environ.items() if k != engines.START_ENV} | ({engines.START_ENV: method} if method else {})
+    r = subprocess.run([sys.executable, "-c", _POOL, str(where)], cwd=REPO, capture_output=True, text=True,
+                       timeout=600, env=env)
+    assert r.returncode == 0, r.stderr
+    return json.loads(r.stdout.strip().splitlines()[-1]), [int(x) for x in where.read_text().split()]
+
+
+def _check_warm(out: dict) -> None:
+    assert len(out["workers"]) == 2                     # both workers exist before any task is submitted
+    assert out["env"][0] is None and out["env"][1] is None      # this process's environment as it was
+    assert len(out["got"]) == 6 and {g["pid"] for g in out["got"]} <= set(out["workers"])
+    for g in out["got"]:
         assert g["mcap"] and g["mrcal"] and g["kernels"] == dict.fromkeys(KERNELS, 1) | {"_apply": 1}
         assert g["env"] == "stdlib" and not g["setuptools"]     # mrcal's distutils import did not load setuptools
-    assert not any(_alive(p) for p in spawned)                     # ended with the block
+    assert not any(_alive(p) for p in out["workers"])          # ended with the block
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
+def test_forked_workers_are_warm_from_one_warm_up_in_the_parent(tmp_path):
+    """With START_ENV=fork the warm-up runs once, in the exporting process, and both workers are forked from it: they
+    hold its kernels and imports without loading them again (spawned, each runs its own warm-up: 0.7 s of CPU each at
+    full size)."""
+    out, warmed = _pool_run(tmp_path, "fork")
+    assert out["method"] == "fork"
+    assert warmed == [out["parent"]]                   # once, and not in a worker
+    assert not out["parent_setuptools"]                # the parent's warm-up ran with the stdlib's distutils too
+    _check_warm(out)
+
+
+def test_spawned_workers_each_warm_up_before_their_first_task(tmp_path):
+    """By default (START_ENV unset: spawn) each worker runs the warm-up as it starts."""
+    out, warmed = _pool_run(tmp_path)
+    assert out["method"] == "spawn"
+    assert sorted(warmed) == sorted(out["workers"])      # in each worker, not in the parent
+    _check_warm(out)
+
+
+def test_an_unknown_start_method_is_one_line(monkeypatch):
+    monkeypatch.setenv(engines.START_ENV, "thread")
+    with pytest.raises(engines.EngineError, match=f"^{engines.START_ENV}=thread: expected spawn or fork$"):
+        engines.Pool(2)
 
 
 def test_a_pool_of_one_or_another_engine_starts_nothing():
@@ -128,3 +185,46 @@ def test_an_aborted_pool_leaves_nothing_for_the_exit_hook_to_write_to(monkeypatc
     pool.close(abort=True)
     assert not manager.is_alive() and wakeup._closed
     assert all(f.done() for f in busy)                               # their tasks abandoned, not waited for
+
+
+#: in a fresh interpreter: the big blocks one full-size sample allocates and frees (a registration's accumulators and
+#: points, a decompressed chunk, a depth image), six rounds; prints the minor page faults of rounds 2 to 6 and the
+#: pages they allocate
+_FAULTS = (
+    "import resource, sys\n"
+    "import numpy as np\n"
+    "from platform_tools.dataset.workers import keep_freed_memory\n"
+    "kept = keep_freed_memory() if sys.argv[1] == 'keep' else None\n"
+    "SIZES = (14_000_000, 13_000_000, 4_600_000, 2_600_000, 2_300_000)\n"
+    "def one():\n"
+    "    blocks = [np.ones(n // 8) for n in SIZES]\n"
+    "    del blocks\n"
+    "one()\n"
+    "a = resource.getrusage(resource.RUSAGE_SELF).ru_minflt\n"
+    "for _ in range(5):\n"
+    "    one()\n"
+    "print(kept, resource.getrusage(resource.RUSAGE_SELF).ru_minflt - a, 5 * sum(SIZES) // 4096)\n")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt")
+def test_a_process_that_keeps_freed_memory_reuses_its_pages():
+    def run(mode: str) -> tuple[str, int, int]:
+        r = subprocess.run([sys.executable, "-c", _FAULTS, mode], cwd=REPO, capture_output=True, text=True,
+                           timeout=120)
+        assert r.returncode == 0, r.stderr
+        kept, faults, pages = r.stdout.split()
+        return kept, int(faults), int(pages)
+    kept, faults, pages = run("keep")
+    assert kept == "True" and faults < pages // 100           # the freed pages serve the next sample's blocks
+    _, faults, pages = run("default")
+    assert faults > pages // 10                                 # what glibc's defaults do: fresh pages each time
+
+
+def test_the_export_command_refuses_an_unknown_start_method_in_one_line(sim, tmp_path):
+    out = tmp_path / "ds"
+    env = dict(os.environ) | {engines.START_ENV: "threads"}
+    r = subprocess.run([sys.executable, "-m", "platform_tools.cli.main", "export", str(sim[0]), "--out", str(out),
+                        "--workers", "2", "-q"], cwd=REPO, capture_output=True, text=True, timeout=300, env=env)
+    assert r.returncode == 2 and r.stderr.strip().splitlines() == [
+        f"platform_tools: error: {engines.START_ENV}=threads: expected spawn or fork"], r.stderr
+    assert not out.exists()
