@@ -43,7 +43,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                "from CAD is a warning); 1 solved but the epipolar RMS above it (outputs written); 2 bad input "
                "(a missing model or image, an image without its partner, models of different imager sizes or "
                "lens models, an image of another size than its model, fewer than --min-views shared views, "
-               "a --left-fisheye / --right-fisheye that is not an OpenCV fisheye camera of the model's size).")
+               "a --left-fisheye / --right-fisheye that is not an OpenCV fisheye camera of the model's size, "
+               "a camera's views that --board cannot be the board of: grids larger than it, or labels placed "
+               "by opposite board edges with no view showing both).")
     p.add_argument("--left", required=True, type=Path, metavar="L.cameramodel", help="the left camera's mono model")
     p.add_argument("--right", required=True, type=Path, metavar="R.cameramodel", help="the right camera's mono model")
     p.add_argument("--images", required=True, type=Path, metavar="DIR",
@@ -138,10 +140,14 @@ def cross_check_line(check: dict) -> str:
 
 def detect_pairs(pairs, board, square, target, sizes, quiet: bool):
     """StereoObservations of every (name, left, right) pair; UserError for an unreadable image or one of
-    another size than its model."""
+    another size than its model, and for a camera's views that --board cannot be the board of
+    (calibration/detect/batch.board_size_problem, as `calibrate thermal` refuses them: here a view
+    labelled from the board's other edge in one camera than in the other would give the one board
+    pose the two share two different places)."""
     from calibration.detect import ImageError, detect_target, load_image
+    from calibration.detect.batch import FileDetection, board_size_problem
     from calibration.stereo.pairs import from_detections
-    dets = {0: [], 1: []}
+    found = {0: [], 1: []}
     items = pairs if quiet else progress(pairs, desc="detecting pairs", total=len(pairs), unit="pair")
     for name, *files in items:
         for side, f in enumerate(files):
@@ -153,8 +159,12 @@ def detect_pairs(pairs, board, square, target, sizes, quiet: bool):
             if (img.shape[1], img.shape[0]) != (W, H):
                 raise UserError(f"{f}: {img.shape[1]}x{img.shape[0]} image, its model is for {W}x{H}; "
                                 f"nothing written")
-            d = detect_target(img, board, target)
-            dets[side].append(d if d.detected else None)
+            found[side].append(FileDetection(Path(f), detect_target(img, board, target), "", (W, H), target))
+    for side in (0, 1):
+        why = board_size_problem(found[side], board)
+        if why:
+            raise UserError(f"{Path(pairs[0][1 + side]).parent}: {why}; nothing written")
+    dets = {side: [r.detection if r.detection.detected else None for r in found[side]] for side in (0, 1)}
     return from_detections([p[0] for p in pairs], dets[0], dets[1], board, square)
 
 

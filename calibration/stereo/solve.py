@@ -129,13 +129,18 @@ def solve_pair(obs: StereoObservations, lenses, rt_right_left_seed: np.ndarray, 
                                f"{min_views} needed); take more views with the whole board in both images")
     obs = obs.subset(keep)
     oi = optimization_inputs(obs, lenses, rt_right_left_seed)
+    weighed = int(np.sum(oi["observations_board"][..., 2] > 0))
     with quiet_stderr(not verbose):
-        stats = mrcal.optimize(**oi)
+        mrcal.optimize(**oi)
         if refine_intrinsics:
             oi.update(do_optimize_intrinsics_core=True, do_optimize_intrinsics_distortions=True,
                       do_optimize_calobject_warp=True, do_apply_regularization=True)
-            stats = mrcal.optimize(**oi)
-    return solution(oi, obs.n, int(stats.get("Noutliers", 0)), refine_intrinsics)
+            mrcal.optimize(**oi)
+    # mrcal marks an outlier by its weight (<= 0) in observations_board, and its Noutliers counts every
+    # such point, the unseen ones too (an asymmetric grid's absent half, a partial view's missing
+    # corners): the outliers are the points seen and weighed before the solve, not after it
+    outliers = weighed - int(np.sum(oi["observations_board"][..., 2] > 0))
+    return solution(oi, obs.n, outliers, refine_intrinsics)
 
 
 def solution(oi: dict, n_views: int, n_outliers: int, refined_intrinsics: bool) -> StereoSolution:
