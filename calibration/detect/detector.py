@@ -197,13 +197,20 @@ def detect_corners(image: np.ndarray, board: tuple[int, int] = (10, 7)) -> Detec
     ij = ij - ij.min(axis=0)
     if ij[:, 0].max() < 1 or ij[:, 1].max() < 1:
         return empty_detection((W, H), "only one row of corners found", n_cand)
-    ij, why = anchor(lat.g, xy, ij, W, H)
+    ij, why = anchor(lat.g, xy, ij, W, H, corners_go_on=lambda axis, end: shows_corners_past(lat, xy, ij, axis, end))
     if ij is None:
         return empty_detection((W, H), why, n_cand)
     why = goes_on_past_edge(lat, xy, ij, (W, H))
     if why:
         return empty_detection((W, H), why, n_cand)
     return finish(lat, xy, ij, (W, H))
+
+
+def shows_corners_past(lat: Lattice, xy: np.ndarray, ij: np.ndarray, axis: int, end: int) -> bool:
+    """Whether the destriped image shows at least one corner of the grid (``ij`` labels starting at 0)
+    on the lattice line just past its ``end`` (0 low, 1 high) along ``axis`` (complete.corners_past)."""
+    line = -1 if end == 0 else int(ij[:, axis].max()) + 1
+    return corners_past(lat.f, lat.S, xy, ij, axis, line, lat.noise)[0] > 0
 
 
 PAST_EDGE_MAX = 1     # corners the destriped image shows on a line past the board's edge: at most this many

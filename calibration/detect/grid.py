@@ -340,8 +340,12 @@ def _next_line_inside(shape, pos: dict, axis: int, end: int, margin: float = 4.0
                          (pts[:, 0] <= W - 1 - margin) & (pts[:, 1] <= H - 1 - margin)))
 
 
-def anchor(g: np.ndarray, xy: np.ndarray, ij: np.ndarray, W: int, H: int) -> tuple[np.ndarray | None, str]:
-    """Place a (possibly partial) grid on the board: add the offsets; None and a reason if unsure."""
+def anchor(g: np.ndarray, xy: np.ndarray, ij: np.ndarray, W: int, H: int,
+           corners_go_on=None) -> tuple[np.ndarray | None, str]:
+    """Place a (possibly partial) grid on the board: add the offsets; None and a reason if unsure.
+    ``corners_go_on(axis, end)`` (optional) says whether the image shows corners of this grid on the
+    lattice line just past ``end`` (0 low, 1 high) of ``axis`` (labels ``ij`` as given): an 'open'
+    end that shows none does not back a weak 'closed' one at the other end."""
     pos = {tuple(k): p for k, p in zip(ij, xy)}
     out = ij.copy()
     for axis, n_board in ((0, W), (1, H)):
@@ -365,6 +369,13 @@ def anchor(g: np.ndarray, xy: np.ndarray, ij: np.ndarray, W: int, H: int) -> tup
         # positively goes on, or the corners missing there would lie outside the image; a faint
         # last row of squares inside the image looks the same as the board's border otherwise
         for end, this, other in ((0, lo, hi), (1, hi, lo)):
+            if this == "closed" and other == "open" and corners_go_on is not None \
+                    and not corners_go_on(axis, 1 - end):
+                # the squares past the other end 'alternate', but no corner of the grid shows on the
+                # line there: the alternation is the background's (8-bit AGC: opencv8 hard seed 11
+                # image 001, the stripes past the board's top edge, while its faint last row read as
+                # the border: 25 corners labelled one row off, 14-19 px)
+                other = "unknown"
             if this == "closed" and other != "open" and _next_line_inside(g.shape, pos, axis, 1 - end) > 0.5:
                 if end == 0:
                     lo = "unknown"
