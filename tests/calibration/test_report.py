@@ -166,14 +166,20 @@ def _without_image_corners(obs, radius_px: float):
 @pytest.fixture(scope="module")
 def covered():
     lm, intr = fisheye_truth(408.3, SIZE)
-    return simulate(lm, intr, SIZE, n=40, noise_px=0.05, seed=11, tilt_deg=35.0)
+    return simulate(lm, intr, SIZE, n=40, noise_px=0.05, seed=13, tilt_deg=35.0)   # see test_cross_validation_grades_uncovered_corners
 
 
 @pytest.mark.slow
 def test_cross_validation_grades_uncovered_corners(covered):
     """A covered set is trusted over the whole image. Without corners near the four image corners
     the model may be far off there, but where the verdict trusts it, it is right: trusted within its
-    region, and accurate inside it. With the holes reaching into the central 80%: not trusted."""
+    region, and accurate inside it. With the holes reaching into the central 80%: not trusted.
+
+    The premise, an OPENCV8 solve with no pole out to the image corners on the covered set, is fragile:
+    with seed 11 the pole sits at 53.6 deg (corners at 57.9) with OpenBLAS's AVX2/AVX-512 kernels and
+    out of the image with its Sandybridge kernel; seeds 12 and 17 have it inside on all three. Seed 13
+    holds it on all three (OPENBLAS_CORETYPE=Haswell, SkylakeX, Sandybridge). The product's default
+    does not rest on it: calibration/thermal/pipeline.py sets such an OPENCV8 aside for Kannala-Brandt."""
     import mrcal
     lm, intr = fisheye_truth(408.3, SIZE)
 
