@@ -20,6 +20,12 @@ they cross and the part beside them), not by the layout code that placed them:
 - ``orin_exhaust``: its heat sink blows out of its +-y faces, through the side wall slots (tray and
   lid) beside it; same need as the intake.
 
+The DC-DC converter moves no air of its own; it loses ``load x (1 / efficiency - 1)`` as heat (cad/electrical.py's
+budget). It must stand in a stream (``converter_stream``): in front of one of the devkit's exhaust faces, between
+it and the side wall, overlapping that face, with ``orin_exhaust`` slots over it (within its length, above its
+top) for the stream to leave by after passing it. That is a rule of presence, not of flow: the free area of
+those slots is measured (both ways, as the paths) and reported beside the loss, and fails only when it is none.
+
 Both rules are rules of thumb (docs/cad.md, "Cooling the computer"). Each free area is measured
 twice: on the B-rep (the built case halves sectioned at each wall's mid-plane, inside each slot's
 window, the slot grown by one ray cell: the window's area less the material's) and on the case halves
@@ -56,6 +62,8 @@ AGREE_REL, AGREE_ABS_MM2 = 0.01, 1.0
 CASE_NODES = ("case_lower", "case_lid")
 #: the node whose fan draws through the roof, and what may stand in its inlet's column
 ORIN_NODE = "jetson_agx_orin"
+#: the node that loses heat without a fan of its own and must stand in the devkit's exhaust stream
+CONVERTER_NODE = "dc_converter"
 
 
 @dataclass(frozen=True)
@@ -102,6 +110,22 @@ class PathReading:
 
 
 @dataclass
+class StreamReading:
+    """Where a part without a fan of its own (the converter) loses its heat: the exhaust face it stands in front
+    of ("" when none) and the slots over it that stream leaves by, their free area both ways."""
+    part: str
+    loss_w: float
+    beside: str
+    windows: tuple[Window, ...]
+    brep_mm2: float = 0.0
+    stl_mm2: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return bool(self.beside) and bool(self.windows) and min(self.brep_mm2, self.stl_mm2) > 0.0
+
+
+@dataclass
 class AirflowReport:
     readings: list[PathReading]
     gap_brep_mm: float
@@ -112,6 +136,7 @@ class AirflowReport:
     details: list[str] = field(default_factory=list)
     data: dict = field(default_factory=dict)
     side: "inlet_gap.GapReading | None" = None    # what stands in the gap round the fan (cad/inlet_gap.py)
+    converter: StreamReading | None = None        # the converter's heat, in the devkit's exhaust stream
 
 
 # ----------------------------------------------------------------------------- the paths
@@ -188,6 +213,26 @@ def air_paths(lay) -> list[AirPath]:
     paths.append(AirPath("orin_intake", fan, ring, v.min_area_ratio * ring, tuple(intake), "roof over the devkit"))
     paths.append(AirPath("orin_exhaust", fan, ring, v.min_area_ratio * ring, tuple(exhaust), "side walls beside the devkit"))
     return paths
+
+
+def converter_stream(lay, paths: list[AirPath], part: str = CONVERTER_NODE) -> tuple[str, tuple[Window, ...]]:
+    """The devkit's exhaust face the converter stands in front of (``"+y"`` / ``"-y"``; ``""`` when none): the
+    converter between that face and the side wall, overlapping it along x and z; and the windows of
+    ``orin_exhaust`` on that side over the converter (overlapping its length, wholly above its top), which the
+    stream leaving that face passes it to reach."""
+    cb, ob = lay.power.converter_box, lay.compute.orin_box
+    s = 1.0 if cb.centre[1] > ob.centre[1] else -1.0
+    face = ob.hi[1] if s > 0 else ob.lo[1]
+    wall = lay.case.interior.hi[1] if s > 0 else lay.case.interior.lo[1]
+    between = all(min(face, wall) - 1e-6 <= y <= max(face, wall) + 1e-6 for y in (cb.lo[1], cb.hi[1]))
+    overlaps = all(cb.lo[k] < ob.hi[k] and ob.lo[k] < cb.hi[k] for k in (0, 2))
+    if not (between and overlaps):
+        return "", ()
+    exhaust = next((p for p in paths if p.name == "orin_exhaust"), None)
+    ws = tuple(w for w in (exhaust.windows if exhaust else ())
+               if np.sign(w.box.centre[1]) == s and w.box.lo[0] < cb.hi[0] and cb.lo[0] < w.box.hi[0]
+               and w.box.lo[2] >= cb.hi[2] - 1e-6)
+    return ("+y" if s > 0 else "-y"), ws
 
 
 # ----------------------------------------------------------------------------- B-rep measurements
@@ -340,6 +385,11 @@ def airflow_report(asm, paths: list[AirPath] | None = None) -> AirflowReport:
         for p in paths:
             free, rays = stl_free_area_mm2(case_tri, p.windows)
             readings.append(PathReading(p, brep_free_area_mm2(case_shapes, p.windows), free, rays))
+        beside, cws = converter_stream(lay, paths)
+        conv = StreamReading(CONVERTER_NODE, _converter_loss_w(asm), beside, cws)
+        if cws:
+            conv.brep_mm2 = brep_free_area_mm2(case_shapes, cws)
+            conv.stl_mm2 = stl_free_area_mm2(case_tri, cws)[0]
         col = Bounds((centre[0] - cp.fan_diameter / 2, centre[1] - cp.fan_diameter / 2, ob.hi[2]),
                      (centre[0] + cp.fan_diameter / 2, centre[1] + cp.fan_diameter / 2, ob.hi[2] + height))
         pts = fan_disc_points(centre, cp.fan_diameter)
@@ -352,7 +402,7 @@ def airflow_report(asm, paths: list[AirPath] | None = None) -> AirflowReport:
         side = inlet_gap.gap_reading(gap, inlet_gap.need_mm2(asm), {**dict(zip(CASE_NODES, case_shapes)), **in_gap},
                                      np.concatenate(gap_tri))
     gap_stl = float(hits.min() - ob.hi[2]) if np.isfinite(hits).any() else height
-    r = AirflowReport(readings, gap_brep, gap_stl, gap_need, gap_by, side=side)
+    r = AirflowReport(readings, gap_brep, gap_stl, gap_need, gap_by, side=side, converter=conv)
     ratio = rig.desc.enclosure.vents.min_area_ratio
     r.problems += _shared_slots(paths)
     for g in readings:
@@ -382,6 +432,15 @@ def airflow_report(asm, paths: list[AirPath] | None = None) -> AirflowReport:
     if abs(gap_brep - gap_stl) > STL_TOLERANCE_MM + 1e-3:
         r.problems.append(f"orin_intake: the B-rep ({gap_brep:.2f} mm) and the STL ({gap_stl:.2f} mm) disagree on the "
                           f"clear height over the devkit's fan")
+    where = (f"in front of the devkit's {conv.beside} exhaust face" if conv.beside
+             else "beside no exhaust face of the devkit")
+    r.details.append(f"{conv.part}: loses {conv.loss_w:.1f} W; stands {where}; {len(conv.windows)} orin_exhaust slots "
+                     f"over it, {conv.brep_mm2:.0f} mm^2 free (B-rep) / {conv.stl_mm2:.0f} mm^2 (STL)")
+    if not conv.ok:
+        r.problems.append(f"{conv.part}: loses {conv.loss_w:.1f} W but stands in no air path: " +
+                          ("it is not between an exhaust face of the devkit and the side wall" if not conv.beside
+                           else "no orin_exhaust slot lies over it for the devkit's stream to leave by")
+                          + " (cad/layout/power.py places it, cad/layout/case.py the slots)")
     r.data = {g.path.name: dict(brep_mm2=round(g.brep_mm2, 1), stl_mm2=round(g.stl_mm2, 1), need_mm2=round(g.path.need_mm2, 1),
                                 fan_area_mm2=round(g.path.fan_area_mm2, 1), slots=len(g.path.windows), rays=g.rays)
               for g in readings}
@@ -390,4 +449,13 @@ def airflow_report(asm, paths: list[AirPath] | None = None) -> AirflowReport:
     r.data["orin_inlet_side"] = dict(side_mm2=round(side.gap.side_mm2, 1), open_brep_mm2=round(side.open_brep_mm2, 1),
                                      open_stl_mm2=round(side.open_stl_mm2, 1), need_mm2=round(side.need_mm2, 1),
                                      in_gap=list(side.by))
+    r.data["converter_stream"] = dict(loss_w=round(conv.loss_w, 2), beside=conv.beside, slots=len(conv.windows),
+                                      brep_mm2=round(conv.brep_mm2, 1), stl_mm2=round(conv.stl_mm2, 1))
     return r
+
+
+def _converter_loss_w(asm) -> float:
+    """What the converter turns into heat at the rig's load: battery power less load (cad/electrical.py)."""
+    from .electrical import budget, power_counts
+    b = budget(asm.rig, power_counts(asm))
+    return b.battery_w - b.load_w

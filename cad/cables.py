@@ -61,9 +61,10 @@ ORIN_REAR_PORTS = {
     "usb_right": (-25.0, 23.0, "usb_a_right_angle", -1.0),
     "dc_jack": (-5.0, 9.0, "dc_barrel_right_angle", -1.0),
 }
-#: the DC-DC converter's output leads leave its rear face (-x) at its centre, where the DC lead is spliced
-#: to them. Estimate: the converter is a box in the rig (parts.dc_converter)
-CONVERTER_OUT_SHARE = (0.5, 0.5)
+#: the DC-DC converter's output terminals are on its rear end (-x), this share of the way across it (y) from its
+#: outboard face; the DC lead comes in at the plug's height. Estimate: no page read shows where the TEP 150WI's
+#: screw terminals sit (parts.dc_converter); look at a real one and move this
+CONVERTER_OUT_SHARE = 0.5
 #: the USB leads climb from the breakout to their run at this slope (deg), steep enough for the right one to
 #: clear the converter's top before its front face (a shallower one needs more run than the fan plates leave)
 USB_RISE_DEG = 75.0
@@ -271,13 +272,14 @@ def usb_leads(asm: Assembly) -> list[Route]:
     k = cable_table().kinds["usb_lead"]
     R, r = k.min_bend_radius_mm, k.diameter_mm / 2
     orin, clear = lay.compute.orin_box, lay.fits.clear
+    inside_y = lay.case.interior.hi[1] - r - clear       # how far out a lead may run (the interior is symmetric)
     obstacles = [lay.power.converter_box, placed_bounds(lay.power.cutoff.bounds(), lay.power.cutoff_pose),
                  placed_bounds(lay.power.fuse.bounds(), lay.power.fuse_pose)]
     out = []
     for side, pose in lay.power.breakout_poses.items():
         s0 = np.asarray(pose.apply(np.array(lay.power.breakout.usb_socket())), dtype=float)
         port = f"usb_{side}"
-        plug, body, exit_pt, _ = plug_at_port(orin, port)
+        plug, body, exit_pt, port_side = plug_at_port(orin, port)
         y, z0, zp = float(s0[1]), float(s0[2]), exit_pt[2]
         lane = [b for b in obstacles if b.lo[1] - r - clear < y < b.hi[1] + r + clear]
         z_run = max([zp] + [b.hi[2] + r + clear for b in lane])
@@ -288,32 +290,70 @@ def usb_leads(asm: Assembly) -> list[Route]:
         y_rear = orin.hi[1] + r + clear + (R - math.sqrt(R * R - ahead * ahead) if 0 < ahead < R else 0.0)
         y_rear = max(abs(y), y_rear) * math.copysign(1.0, y)
         pts = [tuple(s0), (x1, y, z0), (x2, y, z_run)]
+        into_bay = [(xc, y_rear, zp), tuple(exit_pt)]
         if z_run - zp > 1e-6:   # down to the port's height ahead of the bay's last bend
             down = _slope(z_run - zp, R, USB_RISE_DEG)
             x4 = xc + R + R * math.tan(down / 2) + clear
             x3 = x4 + (z_run - zp) / math.tan(down)
-            pts += [(x3, y_rear, z_run), (x4, y_rear, zp)]
-        pts += [(xc, y_rear, zp), tuple(exit_pt)]
+            # the part it climbed over reaches back past that drop (the converter beside the devkit): the lead
+            # runs on over it to the rear bay and comes down in the bay, into the plug's side (when no descent
+            # fits there, the drop ahead of the bay stays, and the cable check names the part in its way)
+            bay = (_bay_descent(xc, z_run, exit_pt, port_side, R, USB_RISE_DEG, inside_y)
+                   if any(b.lo[0] - r - clear < x3 + R * math.tan(down / 2) for b in lane) else None)
+            if bay:
+                into_bay = bay
+            else:
+                pts += [(x3, y_rear, z_run), (x4, y_rear, zp)]
+        pts += into_bay
         out.append(Route(port, "usb_lead", "boson_usb_cable", (f"sync_breakout_{side}", "jetson_agx_orin"), tuple(pts),
                          R, plugs=(True, False), envelopes=((f"{port} plug ({plug.description})", body),)))
     return out
 
 
+def _bay_descent(xc: float, z_run: float, exit_pt: Vec3, side: float, R: float, slope_deg: float,
+                 y_max: float) -> list[Vec3] | None:
+    """The corners of a lead that comes back along its lane at ``z_run`` over the rear bay (x = ``xc``, the
+    plug's cable exit) and comes down in the bay's plane to the right-angle plug, whose cable leaves it
+    towards ``side`` (+-1 in y): one corner turns it from its run down and inboard, the next one into the
+    plug's side. The descent is ``slope_deg`` from the horizontal, or shallower until the two bends fit
+    between the corners (the first turns about 90 deg, the second the slope), with 2 % to spare.
+    None when no slope fits or the upper corner would leave the interior (beyond ``y_max``)."""
+    _, ye, zp = exit_pt
+    dz = z_run - zp
+    theta = math.radians(slope_deg)
+    while theta > math.radians(STRAIGHT_DEG):
+        if dz / math.sin(theta) >= 1.02 * (R + R * math.tan(theta / 2)):
+            break
+        theta -= math.radians(1.0)
+    else:
+        return None
+    yp = ye + side * 1.02 * R * math.tan(theta / 2)     # the last bend's tangent fits before the plug's side
+    yq = yp + side * dz / math.tan(theta)
+    if abs(yq) > y_max:
+        return None
+    return [(xc, yq, z_run), (xc, yp, zp), tuple(exit_pt)]
+
+
 def dc_lead(asm: Assembly) -> Route:
     """The Orin's DC lead: from the right-angle barrel plug in its DC jack across the rear bay (low in the
-    port band, under the right USB plug), one bend forward into the converter's lane, and a climb to the
-    converter's output at its rear face, where the pigtail is spliced to the converter's own leads."""
+    port band, under the right USB plug), one bend forward into the converter's lane, and on to the
+    converter's output terminals on its rear end (``CONVERTER_OUT_SHARE`` across it), where the pigtail's
+    bare end is clamped: straight in at the plug's height when the rear end spans it, else a climb to the
+    terminals at the rear end's middle."""
     lay = asm.layout
     k = cable_table().kinds["dc_lead"]
-    R = k.min_bend_radius_mm
+    R, r = k.min_bend_radius_mm, k.diameter_mm / 2
     plug, body, exit_pt, _ = plug_at_port(lay.compute.orin_box, "dc_jack")
     conv = lay.power.converter_box
-    out_pt = (conv.lo[0], conv.lo[1] + CONVERTER_OUT_SHARE[0] * (conv.hi[1] - conv.lo[1]),
-              conv.lo[2] + CONVERTER_OUT_SHARE[1] * (conv.hi[2] - conv.lo[2]))
     xc, zp = exit_pt[0], exit_pt[2]
-    corner = (xc, out_pt[1], zp)
-    level = (out_pt[0] - R, out_pt[1], out_pt[2])       # level with the output a radius behind it
-    pts = (tuple(exit_pt), corner, level, out_pt)
+    y_out = conv.lo[1] + CONVERTER_OUT_SHARE * (conv.hi[1] - conv.lo[1])
+    corner = (xc, y_out, zp)
+    if conv.lo[2] + r <= zp <= conv.hi[2] - r:
+        pts = (tuple(exit_pt), corner, (conv.lo[0], y_out, zp))
+    else:
+        out_pt = (conv.lo[0], y_out, conv.centre[2])
+        level = (out_pt[0] - R, y_out, out_pt[2])       # level with the output a radius behind it
+        pts = (tuple(exit_pt), corner, level, out_pt)
     return Route("dc_lead", "dc_lead", "orin_dc_plug", ("jetson_agx_orin", "dc_converter"), pts, R,
                  plugs=(False, False), envelopes=((f"dc_jack plug ({plug.description})", body),))
 

@@ -10,6 +10,7 @@ from platform_tools.rig import Rig
 
 from cad.bought.base import part_of_kind
 from cad.bought.cables import cable_table
+from cad.bought.electronics import BoxPart
 from cad.bought.fan import BlowerFan
 from cad.geom import Bounds, Vec3
 
@@ -84,7 +85,11 @@ def place_shell(rig: Rig, fits: Fits, cameras: Cameras, fans: dict[str, Fan], co
     e = rig.desc.enclosure
     clear, gap, wall = fits.clear, fits.gap, fits.wall
     zed_box = cameras.zed_box
-    half_in = max([abs(zed_box.lo[1]) + clear, abs(zed_box.hi[1]) + clear, compute.orin.size[1] / 2 + clear]
+    # the DC-DC converter stands on its base against the right wall beside the devkit (cad/layout/power.py):
+    # its height off the wall plus a clearance to the devkit's side
+    conv = BoxPart.from_rig(rig, part_of_kind(rig, "converter"))
+    half_in = max([abs(zed_box.lo[1]) + clear, abs(zed_box.hi[1]) + clear, compute.orin.size[1] / 2 + clear,
+                   abs(compute.orin_box.lo[1]) + clear + conv.size[2]]
                   + [max(abs(f.box.lo[1]), abs(f.box.hi[1])) + gap for f in fans.values()]
                   + [max(abs(t.heat_sink.lo[1]), abs(t.heat_sink.hi[1])) + gap for t in cameras.thermal.values()])
     split_z = zed_box.lo[2] - clear

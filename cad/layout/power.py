@@ -58,14 +58,18 @@ class Power:
 
 
 def place_power(rig: Rig, fits: Fits, shell: Shell, compute: Compute, cameras: Cameras) -> Power:
-    """The converter standing on the right wall beside the Orin, the fuse beside it on the floor, the
-    gland and the cut-off in the floor strip ahead of the fuse, the battery dock centred under the Orin
-    with the battery's rear end flush with the dock's, a breakout behind each Boson."""
+    """The converter on its base against the right wall beside the Orin, resting on the floor; the fuse on the
+    floor beside the Orin's other side, the gland and the cut-off in the floor strip ahead of the fuse, the
+    battery dock centred under the Orin with the battery's rear end flush with the dock's, a breakout behind
+    each Boson."""
     clear, floor_z = fits.clear, shell.interior.lo[2]
     orin_box, orin_x = compute.orin_box, compute.orin_pose.t[0]
     conv = BoxPart.from_rig(rig, part_of_kind(rig, "converter"))
     cx, cy, _ = conv.size
-    conv_pose = Pose.from_xyz_rpy_deg((orin_box.hi[0] - cx / 2, shell.interior.lo[1], floor_z + clear + cy / 2),
+    # on its base plate against the right wall (its mounting flanges on the wall), standing on its long edge on
+    # the floor, its front end flush with the devkit's front: it fills the strip beside the devkit, whose right
+    # face blows its exhaust over and past it to the lid's side slots (cad/layout/case.py sizes the strip)
+    conv_pose = Pose.from_xyz_rpy_deg((orin_box.hi[0] - cx / 2, shell.interior.lo[1], floor_z + cy / 2),
                                       (-90.0, 0, 0))
     fuse = BoxPart.from_rig(rig, part_of_kind(rig, "fuse"))
     fuse_pose = pose_xyz(orin_box.lo[0] + fuse.size[0] / 2 + clear, orin_box.hi[1] + clear + fuse.size[1] / 2, floor_z)

@@ -401,6 +401,7 @@ def test_a_rig_part_says_its_maker_and_mpn_once(tmp_path, rig):
     err = _catalogue_problems(tmp_path, rig, same_candidate)
     assert "parts.power_switch.part.candidate: is given, but config/rig.yaml parts.power_switch already is" in err, err
     def nameless_candidate(d):
+        _converter(d)   # a candidate for another converter than the rig's TEP 150-2412WI, its MPN left out
         d["parts"]["dc_converter"]["part"].pop("mpn")
     err = _catalogue_problems(tmp_path, rig, nameless_candidate)
     assert "parts.dc_converter.part.mpn: is missing; a candidate the rig description does not hold yet" in err, err

@@ -438,3 +438,56 @@ def test_trimesh_reading_the_exported_tray_finds_each_intake_s_area(asm, tmp_pat
     assert brep == pytest.approx(slots, rel=1e-3)               # every slot the layout placed is cut through the tray
     assert abs(free - brep) <= edge, (free, brep, edge)
     assert min(free, brep) >= intake.need_mm2
+
+
+def _converter_slots(lay):
+    """The right side wall's slots over the converter, found from the vents' boxes (not the check's windows):
+    crossing the wall on the converter's side, overlapping its length, wholly above its top."""
+    cb, o = lay.power.converter_box, lay.case.outer
+    s = np.sign(cb.centre[1])
+    return [v for v in lay.case.vents if _wall_axis(v, o) == 1 and np.sign(v.centre[1]) == s
+            and v.lo[0] < cb.hi[0] and cb.lo[0] < v.hi[0] and v.lo[2] >= cb.hi[2]]
+
+
+@pytest.mark.slow
+def test_the_converter_stands_in_the_devkit_s_exhaust_stream(results, asm, rig):
+    """The converter (TEP 150-2412WI) loses load x (1/eff - 1) as heat, the load summed here from the rig's parts'
+    power; it stands between the devkit's right face and the wall, and the lid's side slots over it (found from
+    the vents' boxes) are what both readings measure: each slot's 3 mm x its length, within a ray cell's edge."""
+    lay = asm.layout
+    d = results["airflow"].data["converter_stream"]
+    eff = rig.part("dc_converter").efficiency.value
+    load = sum(n * rig.part(p).power_w.value for p, n in (("zed_x", 1), ("boson_640", 2), ("fan_3010_5v", 2),
+                                                          ("jetson_agx_orin", 1), ("zed_link_quad", 1)))
+    assert d["loss_w"] == pytest.approx(load * (1 / eff - 1), abs=0.01)
+    assert d["beside"] == "-y"
+    slots = _converter_slots(lay)
+    assert d["slots"] == len(slots) > 0
+    w = rig.desc.enclosure.vents.slot_width_mm
+    area = sum(w * (v.hi[0] - v.lo[0]) if v.size[0] > v.size[2] else w * v.size[2] for v in slots)
+    assert d["brep_mm2"] == pytest.approx(area, rel=0.01) and d["stl_mm2"] == pytest.approx(area, rel=0.01)
+
+
+@pytest.mark.slow
+def test_the_slots_over_the_converter_filled_fail_naming_it(asm):
+    from cad import checks
+    r = checks.check_airflow(_with_case_boxes(asm, set(_converter_slots(asm.layout))))
+    assert not r.ok
+    assert r.data["converter_stream"]["brep_mm2"] == pytest.approx(0.0, abs=1.0)
+    assert any(p.startswith("dc_converter: loses") and "stands in no air path: no orin_exhaust slot lies over it" in p
+               for p in r.details), r.details
+
+
+def test_a_converter_away_from_the_devkit_s_side_stands_in_no_stream(lay):
+    """Moved ahead of the devkit (its front end 10 mm past the devkit's front face), the converter faces no
+    exhaust face: no stream, no slots. Where it stands, the stream is the right face's."""
+    from cad.airflow import converter_stream
+    paths = air_paths(lay)
+    assert converter_stream(lay, paths)[0] == "-y" and converter_stream(lay, paths)[1]
+    p = lay.power
+    ahead = p.converter_pose.t[0] + (lay.compute.orin_box.hi[0] - p.converter_box.lo[0]) + 10.0
+    from platform_tools.rig.frames import Pose
+    moved = Pose(p.converter_pose.R, np.array([ahead, *p.converter_pose.t[1:]]))
+    lay2 = dataclasses.replace(lay, power=dataclasses.replace(p, converter_pose=moved))
+    assert lay2.power.converter_box.lo[0] == pytest.approx(lay.compute.orin_box.hi[0] + 10.0)
+    assert converter_stream(lay2, paths) == ("", ())

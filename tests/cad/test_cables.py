@@ -157,6 +157,49 @@ def test_the_rear_port_leads_pass_and_their_plugs_stand_clear_of_the_rear_wall(a
         assert arcs and all(e.radius() == pytest.approx(KINDS["usb_lead"].min_bend_radius_mm) for e in arcs)
 
 
+def _wire_points(route, n=600):
+    """Points along the route's built centre line (OpenCascade's wire, not the waypoints)."""
+    w = centreline(route)
+    return np.array([tuple(w.positionAt(t)) for t in np.linspace(0.0, 1.0, n)])
+
+
+@pytest.mark.slow
+def test_the_right_usb_lead_passes_over_the_converter_and_comes_down_in_the_rear_bay(asm):
+    """The converter (TEP 150-2412WI, 98 mm long) fills the strip beside the devkit from its front face to 18.5 mm
+    short of the plug's exit: the right USB lead runs over its top and comes down behind its rear end, in the
+    bay. Read on the built wire: the cable's surface is at least a clearance off the converter's box everywhere,
+    over its footprint at least a clearance above its top; wherever it is lower than that top, it is behind the
+    converter's rear end, between it and the plug's exit. Laid as before (down to the port's height in the lane ahead of the bay),
+    the lead runs into the converter, and the cable check names it."""
+    from cad.cables import cable_report
+    lay = asm.layout
+    conv, clear = lay.power.converter_box, lay.fits.clear
+    k = KINDS["usb_lead"]
+    r, R = k.diameter_mm / 2, k.min_bend_radius_mm
+    lead = next(x for x in _rear_leads(asm) if x.name == "usb_right")
+    pts = _wire_points(lead)
+    gap = np.linalg.norm(np.maximum(np.maximum(np.array(conv.lo) - pts, pts - np.array(conv.hi)), 0.0), axis=1)
+    assert gap.min() >= r + clear - 0.05        # the cable's surface a clearance off the converter everywhere
+    over = (pts[:, 0] > conv.lo[0]) & (pts[:, 0] < conv.hi[0]) & (pts[:, 1] < conv.hi[1])
+    assert over.sum() > 50 and (pts[over, 2] - r).min() >= conv.hi[2] + clear - 1e-3
+    below = (pts[:, 2] < conv.hi[2]) & (pts[:, 0] < conv.hi[0])   # down at the converter's height, behind the cameras
+    exit_x = lead.points[-1][0]
+    assert below.any() and (pts[below, 0] < conv.lo[0] - r - clear).all()
+    assert (pts[below, 0] >= exit_x - 1e-3).all()                 # between the plug's exit and the converter
+    # the old way into the bay: from the run over the converter down to the port's height ahead of the bay's
+    # bend (75 deg, its bends R apart), in the lane it runs in over the converter, then across the bay into the plug
+    # (the lead's points: the socket, the climb's two corners, then the run's end over the bay, ...)
+    z_run, zp, xc, y_rear = lead.points[2][2], lead.points[-1][2], exit_x, lead.points[3][1]
+    assert z_run == pytest.approx(conv.hi[2] + r + clear) and lead.points[3][2] == pytest.approx(z_run)
+    x4 = xc + R + R * math.tan(math.radians(37.5)) + clear
+    x3 = x4 + (z_run - zp) / math.tan(math.radians(75.0))
+    old = dataclasses.replace(lead, points=tuple(lead.points[:3]) + ((x3, y_rear, z_run), (x4, y_rear, zp),
+                                                                      (xc, y_rear, zp), lead.points[-1]))
+    assert not path_of(old, k).problems     # a well-formed route: what fails it is the part in its way
+    rep = cable_report(asm, only=[old])
+    assert any(p.startswith("cable usb_right (") and "dc_converter" in p for p in rep.problems), rep.problems
+
+
 @pytest.mark.slow
 def test_a_rear_lead_bent_too_tight_fails(asm):
     k = KINDS["usb_lead"]
