@@ -128,12 +128,13 @@ def solve_once(obs: BoardObservations, *, solver: str, lens_model: str | None, f
     accepts, None: chosen by the data, below) or "opencv" (cv2.fisheye); ``focal_px`` the nominal focal
     length, the seed. Returns an :class:`~calibration.intrinsics.mrcal_solver.Solution`.
 
-    The default (``lens_model`` None, mrcal) is chosen by the data between OPENCV8 (mrcal) and OpenCV's
-    Kannala-Brandt fisheye solved from the same corners: a model with a pole or fold out to the image
-    corners' angle (the widest of its own, the data's and ``nominal_corner_angle_deg``) or that does not
+    The default (``lens_model`` None, mrcal) is chosen by the data between OpenCV's Kannala-Brandt fisheye
+    and mrcal's OPENCV8, or OPENCV5 in OPENCV8's place when OPENCV8 is unusable, solved from the same
+    corners (calibration/thermal/lens_choice.py): a model with a pole or fold out to the image corners'
+    angle (the widest of its own, the data's and ``nominal_corner_angle_deg``) or that does not
     round-trip over the whole image (thermal/lens_check.py) is out; between two healthy ones, the one
     that predicts held-out views better (calibration/intrinsics/model_choice.py: Kannala-Brandt unless
-    OPENCV8 is significantly better). The notes say which and why."""
+    the mrcal model is significantly better). The notes say which and why."""
     from calibration.intrinsics import SolveError, mrcal_solver, opencv_solver
     from calibration.intrinsics.lensmodels import LensModelError
     try:
@@ -144,43 +145,31 @@ def solve_once(obs: BoardObservations, *, solver: str, lens_model: str | None, f
         solution = mrcal_solver.solve(obs, lensmodel=lens_model, focal_px=focal_px)
         if lens_model is not None:
             return solution
-        try:
-            alt = opencv_solver.solve(obs, focal_px=focal_px)
-        except SolveError:
-            alt = None
-        return _choose(solution, alt, nominal_corner_angle_deg)
+        return _choose(obs, solution, focal_px, nominal_corner_angle_deg)
     except LensModelError as exc:
         raise UserError(str(exc)) from None
     except SolveError as exc:
         raise CheckFailed(str(exc)) from None
 
 
-def _choose(o8, kb, nominal_corner_angle_deg: float):
-    """The default model: see :func:`solve`."""
-    from calibration.intrinsics.model_choice import ModelChoiceError, choose
-    from calibration.thermal.lens_check import solution_health
-    h8 = solution_health(o8, min_corner_angle_deg=nominal_corner_angle_deg)
-    hk = None if kb is None else solution_health(kb, min_corner_angle_deg=nominal_corner_angle_deg)
-    if hk is None or not hk.ok:
-        if h8.ok:
-            why = "could not be solved" if hk is None else f"is unusable: {hk.problem()}"
-            o8.notes.append(f"lens model chosen by the data: OPENCV8 (no pole or fold out to "
-                            f"{h8.corner_angle_deg:.1f} deg, round trip within {h8.round_trip_max_px:.1g} px); "
-                            f"Kannala-Brandt {why}")
-        return o8                  # when neither holds, the verdict names what is wrong with OPENCV8
-    if not h8.ok:
-        kb.notes.append(f"lens model chosen by the data: Kannala-Brandt (OpenCV fisheye), because OPENCV8 "
-                        f"is unusable here: {h8.problem()}")
-        return kb
+def _choose(obs: BoardObservations, o8, focal_px: float, nominal_corner_angle_deg: float):
+    """The default model (:func:`solve_once`): Kannala-Brandt solved from ``obs`` beside OPENCV8 (and
+    OPENCV5 when OPENCV8 is unusable), then calibration/thermal/lens_choice.py keeps one. A candidate
+    that cannot be solved is left out."""
+    from calibration.intrinsics import SolveError, mrcal_solver, opencv_solver
+    from calibration.thermal import lens_choice as lc
     try:
-        c = choose(kb, o8)
-    except ModelChoiceError as exc:
-        o8.notes.append(f"lens model: OPENCV8, held-out comparison with Kannala-Brandt not possible ({exc})")
-        return o8
-    best = (kb, o8)[c.chosen]
-    best.notes.append(f"lens model chosen by the data: {c.note()}")
-    best.model_choice = c.summary()
-    return best
+        kb = opencv_solver.solve(obs, focal_px=focal_px)
+    except SolveError:
+        kb = None
+
+    def opencv5():
+        try:
+            return mrcal_solver.solve(obs, lensmodel=lc.MRCAL_NAMES[lc.OPENCV5], focal_px=focal_px)
+        except Exception:      # noqa: BLE001 - mrcal raises plain errors on real data; OPENCV8 is solved
+            return None
+
+    return lc.choose_default(o8, kb, opencv5, nominal_corner_angle_deg)
 
 
 def calibrate(images: str, board: tuple[int, int], square_m: float, *, solver: str, lens_model: str | None,
