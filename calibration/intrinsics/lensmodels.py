@@ -7,9 +7,10 @@ a 95 deg lens to a few hundredths of a pixel where there is data, stay well-beha
 boards, and map one-to-one onto ROS ``rational_polynomial`` and OpenCV's rational model. A splined
 model follows any lens exactly but needs boards in every part of the image, and no other tool reads it.
 Without ``--lens-model`` the pipeline solves both OPENCV8 and OpenCV's Kannala-Brandt from the same
-corners, drops a model with a pole or fold inside the image (calibration/lens/health.py), and between
+corners (and OPENCV5, which has no denominator and so no pole, in OPENCV8's place when OPENCV8 is
+unusable), drops a model with a pole or fold inside the image (calibration/lens/health.py), and between
 two healthy ones keeps the one that predicts held-out views better (calibration/intrinsics/model_choice.py:
-Kannala-Brandt unless OPENCV8 is significantly better; calibration/thermal/pipeline.py).
+Kannala-Brandt unless the mrcal model is significantly better; calibration/thermal/lens_choice.py).
 The splined model is not a candidate of the default: on the bench's 40-image Kannala-Brandt "real"
 set (36 boards) it was 17 px RMS off the truth over the image (Nx=20) and 11 px (Nx=12), its knots
 outside the boards held only by regularisation.
