@@ -12,17 +12,19 @@
    dataset package, its command export_cmd.py and the CLI's main.py, at a git revision, ``--previous REV``,
    default ``b7c0534``: the code issue 15 item 6 calls "today's"; repeat the option for several, e.g.
    ``--previous b7c0534 --previous HEAD``; each in a copy of this tree where only the export code differs)
-   beside this tree's, on the same recording, alternating, after one untimed warm-up each (numba compiles into
-   each tree's cache); samples/s end to end (wall clock, indexing included) and the ratios, and the CPU seconds
-   of each run (the command and its workers: what a shared machine's other load disturbs least); then every file
-   of each previous output compared with this tree's (bytes; PNGs that differ are decoded and compared). Each
-   run's 1-minute load average, as it starts, is printed beside it (the machine may be shared). ``--fork`` runs
-   this tree a second time with its workers forked (``PLATFORM_TOOLS_EXPORT_WORKERS=fork``) as ``new-fork``.
-   A full-size recording: ``platform_tools simulate-rig --out DIR --duration 12 --scale 1``.
+   beside this tree's, on the same recording, alternating, after one untimed warm-up each at 0.25 Hz (numba
+   compiles into each tree's cache); samples/s end to end (wall clock, indexing included) and the ratios, and the
+   CPU seconds of each run (the command and its workers: what a shared machine's other load disturbs least); then
+   every file of each previous output compared with this tree's (bytes; PNGs that differ are decoded and compared). Each
+   run's 1-minute load average, as it starts, is printed beside it (the machine may be shared). This tree runs
+   with its default workers (forked on Linux); ``--spawn`` runs it again with spawned workers
+   (``PLATFORM_TOOLS_EXPORT_WORKERS=spawn``) as ``new-spawn``, ``--fork`` with forked ones as ``new-fork`` (the
+   default on Linux: for another system, or a tree whose default was spawn). A full-size recording:
+   ``platform_tools simulate-rig --out DIR --duration 12 --scale 1`` (``--duration 60`` for the steady state).
 
 One core for 1 and 2: numba, OpenCV and BLAS are pinned to one thread before they load.
 Run: .venv/bin/python bench/bench_dataset.py [--frames N] [--json] [--export RECORDING [--rate HZ] [--repeats N]
-     [--fork]]
+     [--spawn] [--fork]]
 """
 from __future__ import annotations
 
@@ -142,21 +144,30 @@ def compare_outputs(a: Path, b: Path) -> dict:
     return res
 
 
-#: this tree's export with its workers forked (platform_tools.dataset.engines.START_ENV), run as "new-fork" by --fork
+#: how this tree's export starts its workers (platform_tools.dataset.engines.START_ENV): "new-spawn" by --spawn,
+#: "new-fork" by --fork; unset for "new" and for the previous trees
 FORK_ENV = "PLATFORM_TOOLS_EXPORT_WORKERS"
 
 
+#: the untimed warm-up export's rate: a few samples are enough for numba to fill a tree's cache (a fixed rate, so that
+#: a long recording's warm-up stays short)
+WARM_UP_RATE_HZ = 0.25
+
+
 def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, revs=(BASELINE,),
-                 fork: bool = False) -> dict:
-    """``fork``: this tree a second time with its workers forked ("new-fork"), each run beside the others."""
+                 fork: bool = False, spawn: bool = False) -> dict:
+    """``spawn`` / ``fork``: this tree a second time with its workers spawned ("new-spawn") / forked ("new-fork"),
+    each run beside the others."""
     import tempfile
     with tempfile.TemporaryDirectory(prefix="bench-export-") as tmp:
         tmp = Path(tmp)
         trees = {rev: (previous_tree(tmp, rev), {}) for rev in revs} | {"new": (REPO, {})}
+        if spawn:
+            trees["new-spawn"] = (REPO, {FORK_ENV: "spawn"})
         if fork:
             trees["new-fork"] = (REPO, {FORK_ENV: "fork"})
         for name, (tree, env) in trees.items():          # warm-up: numba compiles into each tree's cache
-            run_export(tree, recording, tmp / f"warm-{name}", max(rate / 4, 0.25), workers, env)
+            run_export(tree, recording, tmp / f"warm-{name}", WARM_UP_RATE_HZ, workers, env)
         times = {n: [] for n in trees}
         cpu = {n: [] for n in trees}
         loads = {n: [] for n in trees}
@@ -189,18 +200,20 @@ def main(argv=None) -> int:
                     help=f"with --export: the git revision of the previous code (repeatable; default {BASELINE})")
     ap.add_argument("--fork", action="store_true",
                     help=f"with --export: also this tree with its workers forked ({FORK_ENV}=fork), as new-fork")
+    ap.add_argument("--spawn", action="store_true",
+                    help=f"with --export: also this tree with its workers spawned ({FORK_ENV}=spawn), as new-spawn")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     if args.export:
         r = bench_export(args.export, args.rate, args.repeats, revs=tuple(args.previous or (BASELINE,)),
-                         fork=args.fork)
+                         fork=args.fork, spawn=args.spawn)
         if args.json:
             print(json.dumps(r, indent=2))
             return 0
         print(f"export of {r['recording']} at {r['rate_hz']:g} Hz, {r['workers']} workers, best of "
               f"{len(r['seconds']['new'])}:")
         for n in r["seconds"]:
-            print(f"  {n:<9} {r['samples'][n]:>5} samples in {min(r['seconds'][n]):7.1f} s: "
+            print(f"  {n:<10} {r['samples'][n]:>5} samples in {min(r['seconds'][n]):7.1f} s: "
                   f"{r['samples_per_s'][n]:6.2f} samples/s  (runs: {', '.join(f'{t:.1f}' for t in r['seconds'][n])} s;"
                   f" CPU {', '.join(f'{t:.1f}' for t in r['cpu_seconds'][n])} s; load average "
                   f"{', '.join(f'{t:.1f}' for t in r['load_average'][n])})")

@@ -21,14 +21,19 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "again to resume an interrupted export (Ctrl-C or SIGTERM stops every worker and "
                                    "keeps the finished chunks; workers end if this process is killed); a folder "
                                    "holding a different export is refused.",
-                       epilog="Exit codes: 0 done, 2 bad input (one line naming the file, topic or option; nothing "
+                       epilog="Workers (--workers N > 1): forked from this process after one warm-up on Linux "
+                              "(the default there), spawned elsewhere or when this process runs other threads; "
+                              "the environment variable PLATFORM_TOOLS_EXPORT_WORKERS=fork|spawn chooses "
+                              "(docs/dataset.md \"Speed and clean stops\"). "
+                              "Exit codes: 0 done, 2 bad input (one line naming the file, topic or option; nothing "
                               "written), 130 interrupted (resumable).")
     p.add_argument("recordings", metavar="RECORDING", nargs="+", type=Path,
                    help="rosbag2 folders, folders holding one (simulate-rig's DIR), or .mcap files")
     p.add_argument("--out", metavar="DIR", required=True, type=Path, help="the dataset folder (created; resumed)")
     p.add_argument("--rate", type=float, default=None, metavar="HZ",
                    help="samples per second (default processing.pair_rate_hz)")
-    p.add_argument("--workers", type=int, default=1, metavar="N", help="worker processes (default 1)")
+    p.add_argument("--workers", type=int, default=1, metavar="N",
+                   help="worker processes (default 1); forked on Linux, see PLATFORM_TOOLS_EXPORT_WORKERS below")
     p.add_argument("--engine", choices=("pool", "dask"), default="pool",
                    help="pool: a process pool on this machine (default); dask: dask.distributed, a local "
                         "cluster of --workers processes or --scheduler's")

@@ -33,22 +33,35 @@ def run_inline(work, tasks, finished, workers, scheduler, pool=None) -> None:
 MANAGER_JOIN_S = 10.0
 
 
-#: how the pool's workers start (this variable, read when a pool starts): "spawn" (the default), each worker a
-#: fresh interpreter running the warm-up itself, or "fork" (Linux), the warm-up run once here and the workers forked
-#: from this process after it, sharing what it loaded (imports, numba's kernels: about 0.7 s of CPU per spawned
-#: worker at full size, docs/dataset.md "Speed")
+#: how the pool's workers start (this variable, read when a pool starts): "fork" (the default on Linux), the
+#: warm-up run once here and the workers forked from this process after it, sharing what it loaded (imports, numba's
+#: kernels: about 0.7 s of CPU per spawned worker at full size, docs/dataset.md "Speed"), or "spawn" (the default
+#: elsewhere), each worker a fresh interpreter running the warm-up itself
 START_ENV = "PLATFORM_TOOLS_EXPORT_WORKERS"
 START_METHODS = ("spawn", "fork")
 
 
+def default_start_method() -> str:
+    """The start method when START_ENV is unset: "fork" on Linux, "spawn" elsewhere (Windows has no fork; on macOS
+    forking a process that loaded system frameworks is unsafe). Also "spawn" in a process already running other
+    Python threads (a notebook's, a server's, the caller's own): a forked child holds only the forking thread, and a
+    lock another thread held at that moment (logging's, an import's) would stay held in every worker. The export
+    command starts its pool before any thread of its own (no progress bar yet, no dask) and stops OpenCV's thread
+    pool while forking (:func:`_opencv_single_threaded`); OpenBLAS, the other native thread pool here, stops its
+    threads itself before a fork (its pthread_atfork handler)."""
+    import threading
+    return "fork" if sys.platform.startswith("linux") and threading.active_count() == 1 else "spawn"
+
+
 def start_method() -> str:
-    """The workers' start method START_ENV asks for ("spawn" when unset); an unknown value is one line."""
+    """The workers' start method START_ENV asks for (:func:`default_start_method` when unset or empty); an unknown
+    value is one line."""
     import os
-    method = os.environ.get(START_ENV) or "spawn"
+    method = os.environ.get(START_ENV) or default_start_method()
     if method not in START_METHODS:
         raise EngineError(f"{START_ENV}={method}: expected {' or '.join(START_METHODS)}")
     if method == "fork" and not sys.platform.startswith("linux"):
-        raise EngineError(f"{START_ENV}=fork: workers are forked on Linux only; leave it unset (spawn)")
+        raise EngineError(f"{START_ENV}=fork: workers are forked on Linux only; leave it unset or set it to spawn")
     return method
 
 
@@ -63,6 +76,7 @@ class Pool:
         import os
         from concurrent.futures import ProcessPoolExecutor
         method = method or start_method()
+        self.method = method                #: "spawn" or "fork", as the workers were started
         ctx = multiprocessing.get_context(method)
         self._before = set(multiprocessing.active_children())
         forked = method == "fork"
@@ -170,7 +184,8 @@ def stdlib_distutils():
 def _opencv_single_threaded():
     """OpenCV's thread pool stopped (``cv2.setNumThreads(1)`` joins its threads) while workers are forked, then set
     back: a forked child holds only the forking thread, and an OpenCV whose pool threads are gone would wait for
-    them. (OpenBLAS, the other library here with threads, handles fork itself.)"""
+    them. (OpenBLAS, the other library here with threads, numpy's and scipy's copies alike, shuts its threads down
+    before a fork itself: tests/dataset/test_dataset_speed_workers.py counts the threads left at each fork.)"""
     import cv2
     n = cv2.getNumThreads()
     cv2.setNumThreads(1)

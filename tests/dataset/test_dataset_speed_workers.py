@@ -1,8 +1,8 @@
 """The export's workers start before the work is known (engines.started) and are ready when it comes: numba's kernels
 loaded by chunk.warm_up with the argument types of the real call (no second specialisation), mrcal imported with the
-standard library's distutils; on Linux the warm-up runs once and the workers are forked from it; an exception in the
-block stops them; a process running chunks reuses the memory it frees (workers.keep_freed_memory). Checked in real
-processes."""
+standard library's distutils; on Linux (the default there) the warm-up runs once and the workers are forked from it;
+an exception in the block stops them; a process running chunks reuses the memory it frees (workers.keep_freed_memory); the fork happens
+with no thread but the forking one. Checked in real processes."""
 from __future__ import annotations
 
 import json
@@ -52,12 +52,13 @@ _POOL = (
     "got = []\n"
     "before = os.environ.get('SETUPTOOLS_USE_DISTUTILS')\n"
     "with engines.started('pool', 2, warm) as pool:\n"
+    "    method = pool.method\n"
     "    workers = [p.pid for p in multiprocessing.active_children()]\n"
     "    env_after = os.environ.get('SETUPTOOLS_USE_DISTUTILS')\n"
     "    engines.run_pool(_state, [None] * 6, lambda t, r: got.append(r), 2, None, pool)\n"
     "print(json.dumps({'parent': os.getpid(), 'workers': workers, 'got': got, 'env': [before, env_after],\n"
     "                  'parent_setuptools': 'setuptools' in sys.modules,\n"
-    "                  'method': engines.start_method()}))\n")
+    "                  'method': method}))\n")
 
 
 def _warm_noting(where: str) -> None:
@@ -88,11 +89,12 @@ def _check_warm(out: dict) -> None:
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
-def test_forked_workers_are_warm_from_one_warm_up_in_the_parent(tmp_path):
-    """With START_ENV=fork the warm-up runs once, in the exporting process, and both workers are forked from it: they
-    hold its kernels and imports without loading them again (spawned, each runs its own warm-up: 0.7 s of CPU each at
-    full size)."""
-    out, warmed = _pool_run(tmp_path, "fork")
+@pytest.mark.parametrize("method", [None, "fork"])
+def test_forked_workers_are_warm_from_one_warm_up_in_the_parent(tmp_path, method):
+    """On Linux, by default (START_ENV unset) and with START_ENV=fork, the warm-up runs once, in the exporting
+    process, and both workers are forked from it: they hold its kernels and imports without loading them again
+    (spawned, each runs its own warm-up: 0.7 s of CPU each at full size)."""
+    out, warmed = _pool_run(tmp_path, method)
     assert out["method"] == "fork"
     assert warmed == [out["parent"]]                   # once, and not in a worker
     assert not out["parent_setuptools"]                # the parent's warm-up ran with the stdlib's distutils too
@@ -100,11 +102,96 @@ def test_forked_workers_are_warm_from_one_warm_up_in_the_parent(tmp_path):
 
 
 def test_spawned_workers_each_warm_up_before_their_first_task(tmp_path):
-    """By default (START_ENV unset: spawn) each worker runs the warm-up as it starts."""
-    out, warmed = _pool_run(tmp_path)
+    """With START_ENV=spawn (the default off Linux) each worker runs the warm-up as it starts."""
+    out, warmed = _pool_run(tmp_path, "spawn")
     assert out["method"] == "spawn"
     assert sorted(warmed) == sorted(out["workers"])      # in each worker, not in the parent
     _check_warm(out)
+
+
+#: in a fresh interpreter (this test process may hold threads earlier tests left): the start method unset, empty,
+#: then with another Python thread running, unset and set to fork, then that thread ended, unset and spawn
+_DEFAULT = (
+    "import json, os, threading\n"
+    "from platform_tools.dataset import engines\n"
+    "def m(v):\n"
+    "    os.environ.pop(engines.START_ENV, None) if v is None else os.environ.__setitem__(engines.START_ENV, v)\n"
+    "    return engines.start_method()\n"
+    "got = [m(None), m('')]\n"
+    "release = threading.Event()\n"
+    "other = threading.Thread(target=release.wait, name='another')\n"
+    "other.start()\n"
+    "got += [m(None), m('fork')]\n"
+    "release.set()\n"
+    "other.join()\n"
+    "got += [m(None), m('spawn')]\n"
+    "print(json.dumps(got))\n")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
+def test_the_default_is_fork_unless_another_python_thread_runs():
+    """Unset (or empty), START_ENV means fork on Linux, but spawn while the process runs another Python thread (a
+    fork would copy only the forking thread, and any lock the other one held would stay held in every worker); a
+    value given is used as it is."""
+    env = {k: v for k, v in os.environ.items() if k != engines.START_ENV}
+    r = subprocess.run([sys.executable, "-c", _DEFAULT], cwd=REPO, capture_output=True, text=True, timeout=120,
+                       env=env)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout.strip().splitlines()[-1]) == ["fork", "fork", "spawn", "fork", "fork", "spawn"]
+
+
+#: in a fresh interpreter: OpenCV's and OpenBLAS's thread pools started as a caller of the export might have them
+#: (_threaded_work), then the default pool with chunk.warm_up; at each fork, the
+#: Python threads just before it and this process's native threads (/proc/self/task) just after it in the parent
+#: (no thread can start in between: this thread is forking); then each worker runs an OpenCV filter and a BLAS
+#: product (_threaded_work again)
+_THREADS = (
+    "import json, os, sys, threading\n"
+    "import cv2, numpy as np\n"
+    "from platform_tools.dataset import engines\n"
+    "from platform_tools.dataset.chunk import warm_up\n"
+    "from tests.dataset.test_dataset_speed_workers import _threaded_work\n"
+    "_threaded_work()\n"
+    "seen = {'python': [], 'native_after': [], 'native_before': len(os.listdir('/proc/self/task')),\n"
+    "        'cv2_threads': cv2.getNumThreads()}\n"
+    "os.register_at_fork(before=lambda: seen['python'].append([t.name for t in threading.enumerate()]),\n"
+    "                    after_in_parent=lambda: seen['native_after'].append(len(os.listdir('/proc/self/task'))))\n"
+    "got = []\n"
+    "with engines.started('pool', 2, warm_up) as pool:\n"
+    "    forks, method = len(seen['native_after']), pool.method\n"
+    "    engines.run_pool(_threaded_work, [None] * 4, lambda t, r: got.append(r), 2, None, pool)\n"
+    "seen |= {'forks': forks, 'got': got, 'method': method, 'cv2_after': cv2.getNumThreads()}\n"
+    "print(json.dumps(seen))\n")
+
+
+def _threaded_work(_task=None) -> float:
+    """An OpenCV resize of 2000x2000 (large enough for OpenCV's thread pool: a bilateral filter or a blur of that
+    size ran on one thread here) and a BLAS product of 400x400 (OpenBLAS's pool)."""
+    import cv2
+    import numpy as np
+    a = np.random.default_rng(0).random((2000, 2000)).astype(np.float32)
+    b = a[:400, :400].astype(np.float64)
+    return float(cv2.resize(a, (3000, 3000)).sum() + (b @ b).sum())
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
+def test_forked_workers_start_with_no_thread_but_the_forking_one():
+    """The default (forked) pool forks from a process holding only its main thread: no Python thread (progress bar,
+    executor manager, dask) yet, OpenCV's pool stopped for the fork (engines._opencv_single_threaded) and set back
+    after, OpenBLAS's stopped by its own fork handler; the workers then use both libraries' threads and finish.
+    Without _opencv_single_threaded the native count after each fork is 2 or more (tried)."""
+    env = {k: v for k, v in os.environ.items() if k not in (engines.START_ENV, "OMP_NUM_THREADS",
+                                                              "OPENBLAS_NUM_THREADS")}
+    r = subprocess.run([sys.executable, "-c", _THREADS], cwd=REPO, capture_output=True, text=True, timeout=600,
+                       env=env)
+    assert r.returncode == 0, r.stderr
+    seen = json.loads(r.stdout.strip().splitlines()[-1])
+    assert seen["method"] == "fork" and seen["forks"] == 2
+    assert seen["native_before"] > 2                 # both libraries' pools were running before the pool started
+    assert seen["python"] == [["MainThread"]] * 2
+    assert seen["native_after"] == [1, 1]
+    assert seen["cv2_after"] == seen["cv2_threads"] > 1      # OpenCV's thread count given back to the caller
+    assert len(seen["got"]) == 4 and len(set(seen["got"])) == 1
 
 
 def test_an_unknown_start_method_is_one_line(monkeypatch):
@@ -228,3 +315,11 @@ def test_the_export_command_refuses_an_unknown_start_method_in_one_line(sim, tmp
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [
         f"platform_tools: error: {engines.START_ENV}=threads: expected spawn or fork"], r.stderr
     assert not out.exists()
+
+
+def test_the_export_help_names_the_default_and_the_variable():
+    r = subprocess.run([sys.executable, "-m", "platform_tools.cli.main", "export", "--help"], cwd=REPO,
+                       capture_output=True, text=True, timeout=120, env=dict(os.environ, COLUMNS="200"))
+    assert r.returncode == 0, r.stderr
+    text = " ".join(r.stdout.split())
+    assert f"{engines.START_ENV}=fork|spawn" in text and "forked from this process after one warm-up on Linux" in text

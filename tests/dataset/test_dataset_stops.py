@@ -1,8 +1,10 @@
 """Clean stops of a real `platform_tools export` process with a pool of 2 workers: Ctrl-C (SIGINT to the process
-group, as a terminal sends it), SIGTERM, and a SIGKILL of the parent. Workers are found by pid (the parent's
-children in /proc) and checked gone, not timed; the interrupted export is then resumed with the same command and
-must equal, file for file, an uninterrupted export made with that command: byte for byte, except that a PNG
-need only hold the same scanlines (ISA-L's deflate may encode them with other Huffman tables: tests/dataset/pngsame.py)."""
+group, as a terminal sends it), SIGTERM, and a SIGKILL of the parent; each with spawned and with forked workers
+(engines.START_ENV, inherited by the export process; forked is the default on Linux). Workers are found by pid (the
+parent's children in /proc) and checked gone, not timed; the interrupted export is then resumed with the same
+command and must equal, file for file, an uninterrupted export made with that command: byte for byte, except that a
+PNG need only hold the same scanlines (ISA-L's deflate may encode them with other Huffman tables:
+tests/dataset/pngsame.py)."""
 from __future__ import annotations
 
 import json
@@ -16,6 +18,7 @@ from pathlib import Path
 
 import pytest
 
+from platform_tools.dataset.engines import START_ENV
 from tests.conftest import REPO
 from tests.dataset.pngsame import same_file
 
@@ -23,12 +26,16 @@ pytestmark = [pytest.mark.slow, pytest.mark.skipif(not sys.platform.startswith("
 
 #: a bound on waiting for the export to reach a state; reaching it later fails the test, sooner proves nothing
 WAIT_S = 300
+#: the workers' start methods the stop scenarios run with
+METHODS = ("spawn", "fork")
 
 
 def _cmd(sim_dir: Path, out: Path) -> list[str]:
-    # every pair (30 Hz), one sample per chunk: many chunks, so a stop lands in the middle
+    # every pair (30 Hz), one sample per chunk: many chunks, so a stop lands in the middle; the rig description is
+    # the copy the reference took (beside ``out``), so an edit of config/rig.yaml while the tests run (its hash is in
+    # every marker) does not tell the runs apart
     return [sys.executable, "-m", "platform_tools.cli.main", "export", str(sim_dir), "--out", str(out),
-            "--rate", "30", "--workers", "2", "--chunk-size", "1", "-q"]
+            "--rate", "30", "--workers", "2", "--chunk-size", "1", "--rig", str(out.parent / "rig.yaml"), "-q"]
 
 
 def _children(pid: int) -> dict[int, str]:
@@ -73,11 +80,14 @@ def _markers(out: Path) -> int:
 
 
 @pytest.fixture(scope="module")
-def reference(sim, tmp_path_factory):
-    """An uninterrupted export, made where the interrupted ones go (the card holds the command line), kept aside."""
+def reference(sim, rig_text, tmp_path_factory):
+    """An uninterrupted export, made where the interrupted ones go (the card holds the command line), kept aside;
+    with the default workers, whichever method the interrupted runs use."""
     base = tmp_path_factory.mktemp("stops")
+    (base / "rig.yaml").write_text(rig_text)           # config/rig.yaml as the session read it
     out = base / "ds"
-    r = subprocess.run(_cmd(sim[0], out), cwd=REPO, capture_output=True, text=True, timeout=1200)
+    env = {k: v for k, v in os.environ.items() if k != START_ENV}
+    r = subprocess.run(_cmd(sim[0], out), cwd=REPO, capture_output=True, text=True, timeout=1200, env=env)
     assert r.returncode == 0, r.stderr
     shutil.move(out, base / "reference")
     return base, _tree(base / "reference")
@@ -101,11 +111,27 @@ def _start(sim_dir: Path, out: Path) -> subprocess.Popen:
     return p
 
 
-def _workers(p: subprocess.Popen) -> tuple[list[int], list[int]]:
-    """(the pool's worker pids, every child's pid: the workers and multiprocessing's resource tracker)."""
+@pytest.fixture(params=METHODS)
+def method(request, monkeypatch):
+    """The export processes started in the test start their workers this way (the variable is inherited)."""
+    monkeypatch.setenv(START_ENV, request.param)
+    return request.param
+
+
+def _workers(p: subprocess.Popen, method: str) -> tuple[list[int], list[int]]:
+    """(the pool's worker pids, every child's pid), checked to be what ``method`` makes: spawned, two fresh
+    interpreters running multiprocessing's spawn_main beside its resource tracker (the semaphores of a spawning
+    context are named, and the tracker unlinks them); forked, exactly two children carrying the parent's own
+    command line and no tracker (a forking context's semaphores are unlinked at once)."""
     kids = _children(p.pid)
-    workers = [k for k, cmd in kids.items() if "spawn_main" in cmd]
+    trackers = [k for k, cmd in kids.items() if "resource_tracker" in cmd]
+    workers = [k for k in kids if k not in trackers]
     assert len(workers) == 2, kids
+    if method == "spawn":
+        assert len(trackers) == 1 and all("spawn_main" in kids[w] for w in workers), kids
+    else:
+        own = Path(f"/proc/{p.pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+        assert trackers == [] and all(kids[w] == own for w in workers), kids
     return workers, list(kids)
 
 
@@ -150,11 +176,11 @@ def _explain(differ: list[str], got: dict, reference: dict, before: dict, marker
 
 
 @pytest.mark.parametrize("how", ["ctrl-c", "sigterm"])
-def test_an_interrupt_stops_every_worker_and_the_export_resumes_identical(sim, reference, how):
+def test_an_interrupt_stops_every_worker_and_the_export_resumes_identical(sim, reference, method, how):
     base, ref = reference
     out = base / "ds"
     p = _start(sim[0], out)
-    workers, kids = _workers(p)
+    workers, kids = _workers(p, method)
     if how == "ctrl-c":
         os.killpg(p.pid, signal.SIGINT)           # the whole foreground group, workers included
     else:
@@ -163,18 +189,18 @@ def test_an_interrupt_stops_every_worker_and_the_export_resumes_identical(sim, r
     assert p.returncode == 130, err
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "interrupted" in lines[0] and str(out) in lines[0], err   # no worker traceback
-    # the parent stopped and reaped its workers before it exited; at most the resource tracker is still ending
+    # the parent stopped and reaped its workers before it exited; at most the resource tracker (spawn) is still ending
     assert [w for w in workers if _running(w)] == []
     _wait(lambda: not any(_running(k) for k in kids), "the resource tracker to end")
     assert not list(out.rglob("*.tmp"))                      # what the stopped workers were writing is gone
     _resume_equals_reference(sim[0], out, ref)
 
 
-def test_workers_end_when_the_parent_is_killed(sim, reference):
+def test_workers_end_when_the_parent_is_killed(sim, reference, method):
     base, ref = reference
     out = base / "ds"
     p = _start(sim[0], out)
-    _, kids = _workers(p)
+    _, kids = _workers(p, method)
     p.kill()
     p.wait()
     # without PR_SET_PDEATHSIG the orphans kept encoding for over ten minutes; with it they die at once
