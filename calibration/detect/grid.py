@@ -9,7 +9,10 @@
    seen from the front: never a mirrored grid) and turned, among the rotations that fit a W x H
    board, to the one whose +i steps point most to the image's right: corner (0, 0) is the board's
    top-left corner as seen in the image. A square board thus has one answer per image; a board held
-   more than 45 deg from upright is reported turned (a rigid symmetry of the corner grid).
+   more than 45 deg from upright is reported turned (a rigid symmetry of the corner grid). A partial
+   board whose two quarter-turn labellings are both within TURN_MARGIN_DEG of 45 deg as seen (the roll
+   taken from both step directions, which a fisheye's edge shears apart) is refused: which side is its
+   top the image cannot tell.
 4. A board cut by the image edge or occluded: its offset on the board is anchored by a visible
    board edge (square centres past the last corner line stop alternating); if neither end of an
    axis is seen, the offset is ambiguous and the view is dropped rather than guessed; so is it
@@ -237,7 +240,7 @@ def orient(xy: np.ndarray, ij: np.ndarray, W: int, H: int) -> tuple[np.ndarray, 
         ni, nj = ij0.max(axis=0) + 1
         score = di[0] / (np.linalg.norm(di) + 1e-12)
         if ni <= W and nj <= H:
-            fits.append((score, ij0.copy()))
+            fits.append((score, ij0.copy(), _roll_deg(di, dj)))
         elif ni <= W + TRIM_EXTRA and nj <= H + TRIM_EXTRA:
             off, _ = _best_window(ij0, W, H)
             if off is not None:
@@ -247,11 +250,43 @@ def orient(xy: np.ndarray, ij: np.ndarray, W: int, H: int) -> tuple[np.ndarray, 
                 trims.append((score, out))
         ij = np.stack([ij[:, 1], -ij[:, 0]], axis=1)   # turn 90 deg (keeps handedness)
         di, dj = dj, -di
-    for options in (fits, trims):
-        if options:
-            return max(options, key=lambda o: o[0])[1], ""
+    if fits:
+        best = max(fits, key=lambda o: o[0])
+        if len(ij) < W * H and _turn_ambiguous(best, fits):
+            return ij, (f"partial board held about 45 deg from upright (its rows at {best[2]:+.0f} deg as seen): "
+                        f"which of its sides is its top cannot be told; hold it nearer upright")
+        return best[1], ""
+    if trims:
+        return max(trims, key=lambda o: o[0])[1], ""
     ni, nj = ij.max(axis=0) - ij.min(axis=0) + 1
     return ij, f"found a {max(ni, nj)}x{min(ni, nj)} grid of corners, larger than the {W}x{H} board"
+
+
+#: a partial board's turn is taken from the image only while its rows are further than this from 45 deg as seen
+TURN_MARGIN_DEG = 8.0
+
+
+def _roll_deg(di: np.ndarray, dj: np.ndarray) -> float:
+    """The board's roll as seen (deg, +clockwise, 0 upright): the mean direction of a +i step and of a +j step
+    turned back by 90 deg. Under a fisheye's edge the two steps are far from square (seed 200 hard 10x7
+    Kannala-Brandt image 027: 64 deg apart), so either alone misjudges the roll."""
+    a = np.arctan2(di[1], di[0])
+    b = np.arctan2(dj[1], dj[0]) - np.pi / 2
+    return float(np.degrees(np.arctan2(np.sin(a) + np.sin(b), np.cos(a) + np.cos(b))))
+
+
+def _turn_ambiguous(best, fits) -> bool:
+    """Whether another labelling that fits the board, a quarter turn from ``best``, is about as upright: a partial
+    board seen near 45 deg, whose top side the image cannot tell (complete boards are told apart by their
+    shape, or are square, where a quarter turn is the corner grid's own symmetry). Two cameras of a stereo pair
+    would label it differently, and a mono calibration would take it for another part of the board."""
+    for other in fits:
+        if other is best:
+            continue
+        turn = abs((other[2] - best[2] + 180.0) % 360.0 - 180.0)
+        if abs(turn - 90.0) < 45.0 and min(abs(best[2]), abs(other[2])) > 45.0 - TURN_MARGIN_DEG:
+            return True
+    return False
 
 
 def _end_state(g: np.ndarray, pos: dict, axis: int, end: int, n_other: int) -> str:
