@@ -24,7 +24,9 @@ intervals, ``max(1, round(interval / period))``) are constant but for jitter; a 
 median of the frames after differs from the median before by more than ``STEP_MIN_NS``. Backward steps
 (either sign, any size) are sized exactly; a forward step is known modulo one period unless the
 segments' alignment, the IMU or the frame counter says how many periods it held, or the evidence
-:mod:`.clocksteps` reads (the recorder's log times, the device's status) does. With the frame counter
+:mod:`.clocksteps` reads (the recorder's log times, the device's status) does. A ZED-clock step the IMU
+sizes takes the IMU's size whole (:func:`imu_step_size`), not only its whole periods: the stamps' medians miss
+the fraction by a tenth of a millisecond, which moves every corrected time after the step. With the frame counter
 a thermal stream's steps are found on the counter's trigger grid, at their full size.
 
 Pure functions over stamp arrays (numpy); no I/O.
@@ -39,6 +41,8 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from . import counters
 
+#: IMU samples on each side of a ZED-clock step whose fitted grids size it (:func:`imu_step_size`; 0.25 s at 200 Hz)
+IMU_STEP_WINDOW = 50
 #: a clock step smaller than this is not told apart from jitter (the issue asks for 5 ms)
 STEP_MIN_NS = 2_500_000
 #: frames on each side of a candidate step whose medians are compared
@@ -175,12 +179,47 @@ def reference(t: np.ndarray, period_ns: float, imu: np.ndarray | None = None) ->
             near = np.nonzero((imu[1:] >= min(lo, hi) - 2 * period_ns) & (imu[:-1] <= max(lo, hi) + 2 * period_ns))[0]
             if len(near):
                 j = near[np.argmax(np.abs(di[near] - med))]
-                size = di[j] - med
+                size = imu_step_size(imu, int(j), med)
                 if abs(size) >= STEP_MIN_NS and abs(((size - st.step_ns) / period_ns) - round((size - st.step_ns) / period_ns)) < 0.1:
-                    size_step(ref, t, st, int(round(st.step_ns + round((size - st.step_ns) / period_ns) * period_ns)),
-                              "imu", "the IMU's interval across it (same clock, 200 Hz)", period_ns, refit=False)
+                    # the IMU's size, not the whole periods it adds to the stamps' estimate: the medians of
+                    # STEP_WINDOW jittery frames miss it by a tenth of a millisecond and more, and every corrected
+                    # time after the step (the sampling's slots) would carry that error
+                    size_step(ref, t, st, int(round(size)),
+                              "imu", "the IMU's grid on each side of it (same clock, 200 Hz)", period_ns, refit=False)
     _refit(ref, t)
     return ref
+
+
+def imu_step_size(imu: np.ndarray, j: int, period_ns: float, window: int = IMU_STEP_WINDOW) -> float:
+    """Size (ns) of the clock step in the IMU's interval ``j`` (between samples ``j`` and ``j + 1``; ``imu``: (n,)
+    stamps in ns, recording order; ``period_ns``: its median interval): the IMU's grid fitted by least squares on
+    up to ``window`` samples each side (up to the next irregular interval: another step, a lost sample), both lines
+    extrapolated to the interval, less the mean of their periods. With a single sample on both sides: the interval
+    less ``period_ns``."""
+    t = imu.astype(np.int64) - int(imu[j])               # ns relative to the last sample before the step
+    d = np.diff(t)
+    regular = np.abs(d / period_ns - 1.0) < 0.25
+
+    def side(first: int, last: int, anchor: int):
+        """(value at the anchor sample in ns, period in ns or None) of the line through samples first..last."""
+        y = t[first:last + 1].astype(float)
+        if len(y) < 2:
+            return float(y[0]), None
+        slope, icpt = np.polyfit((np.arange(first, last + 1) - anchor).astype(float), y, 1)
+        return float(icpt), float(slope)
+
+    a = j
+    while a > 0 and j - a + 1 < window and regular[a - 1]:
+        a -= 1
+    b = j + 1
+    while b + 1 < len(t) and b - j < window and regular[b]:
+        b += 1
+    before, p_before = side(a, j, j)
+    after, p_after = side(j + 1, b, j + 1)
+    periods = [p for p in (p_before, p_after) if p is not None]
+    if not periods:
+        return float(d[j] - period_ns)
+    return after - before - float(np.mean(periods))
 
 
 def size_step(ref: CameraTriggers, t: np.ndarray, st: Step, size_ns: int, by: str, evidence: str,
