@@ -25,7 +25,7 @@ through the 8-bit AGC, calibration/synth/agc.py), so 16-bit and 8-bit figures ar
 
 --candidates adds, per set, every candidate of the default on our corners (Kannala-Brandt, OPENCV5,
 OPENCV8, each solved and checked as calibrate thermal does) against the truth, and the model the
-two-candidate rule (Kannala-Brandt or OPENCV8) and the current one keep.
+two-candidate rule (Kannala-Brandt or OPENCV8) and the current one keep, with the kept one's own error.
 
 Usage: .venv/bin/python bench/bench_calib_lenses.py [--n 40] [--seed 11] [--families ...]
        [--conditions real,hard] [--outputs y16,agc8] [--work DIR] [--candidates]
@@ -131,10 +131,17 @@ def candidates(family: str, condition: str, output: str, src: Path, lens, size, 
             old = (lc.KB, lc.OPENCV8)[choose(c[lc.KB], c[lc.OPENCV8]).chosen]
         else:
             old = lc.KB if ok[lc.KB] else lc.OPENCV8
-        now = lc.choose_default(c[lc.OPENCV8], c[lc.KB], lambda: c[lc.OPENCV5], nominal)
+        now = lc.choose_default(c[lc.OPENCV8], c[lc.KB], lambda: c[lc.OPENCV5], nominal,
+                                lambda n: opencv_solver.solve(obs, focal_px=focal, fixed_terms=n))
+        now_err = model_error((lambda v, p=now.intrinsics: kb.project(v, p)) if now.lensmodel == kb.NAME else
+                              (lambda v, s=now: mrcal.project(np.ascontiguousarray(v), s.lensmodel, s.intrinsics)),
+                              lens, size)
     kept = (now.model_choice or {}).get("chosen", lc.OPENCV8)
+    if kept == lc.KB and now.fixed_terms:
+        kept += f" ({lc.HELD_NAMES[now.fixed_terms]} held at 0)"
     cells = " | ".join(f"{err[k][0]:.3f} / {err[k][1]:.3f}{'' if ok[k] else ' (x)'}" for k in (lc.KB, lc.OPENCV5, lc.OPENCV8))
-    return f"| {family} | {condition} | {output} | candidates | {cells} | {old} | {kept} |"
+    return (f"| {family} | {condition} | {output} | candidates | {cells} | {old} | {kept}: "
+            f"{now_err[0]:.3f} / {now_err[1]:.3f} |")
 
 
 def fmt(r: dict) -> str:

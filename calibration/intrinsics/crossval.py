@@ -76,7 +76,7 @@ def _opencv_half(solution: Solution, idx: np.ndarray):
     from .opencv_solver import _calibrate
     obs = solution.observations.subset(idx)
     p = np.asarray(solution.intrinsics, dtype=float)
-    params, _, _ = _calibrate(obs, solution.inlier[idx], float(p[0]))
+    params, _, _ = _calibrate(obs, solution.inlier[idx], float(p[0]), fixed_terms=solution.fixed_terms)
     return (lambda v: kb.project(v, params)), (lambda q: kb.unproject(q, params))
 
 

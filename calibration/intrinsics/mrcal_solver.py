@@ -67,6 +67,7 @@ class Solution:
     board_rt: np.ndarray | None = None   # (N, 6) board poses of a solver without optimization_inputs
     model_choice: dict | None = None     # how the default model was chosen (model_choice.Choice.summary)
     centroid_correction: dict | None = None  # circle grids: the bias iteration (circle_bias.Rounds.summary)
+    fixed_terms: int = 0                 # opencv (Kannala-Brandt): its last terms held at 0 (1: k4; 2: k3, k4)
 
     def cameramodel(self, note: str | None = None):
         import mrcal

@@ -17,11 +17,23 @@ from .observations import BoardObservations
 
 CORNER_OUTLIER_SIGMAS = 5.0    # a corner further than this many robust sigmas is an outlier
 CORNER_OUTLIER_FLOOR_PX = 0.5
+#: Kannala-Brandt terms that may be held at 0 (k4, then k3): a fit whose last terms fold inside the image
+MAX_FIXED_TERMS = 2
 
 
-def _calibrate(obs: BoardObservations, inlier: np.ndarray, focal_px: float, seed: np.ndarray | None = None):
+def _fix_flags(fixed_terms: int) -> int:
+    """cv2.fisheye flags holding Kannala-Brandt's last ``fixed_terms`` terms (0 to MAX_FIXED_TERMS) at 0."""
+    import cv2
+    if not 0 <= fixed_terms <= MAX_FIXED_TERMS:
+        raise ValueError(f"fixed_terms {fixed_terms}: 0 to {MAX_FIXED_TERMS}")
+    return (0, cv2.fisheye.CALIB_FIX_K4, cv2.fisheye.CALIB_FIX_K3 | cv2.fisheye.CALIB_FIX_K4)[fixed_terms]
+
+
+def _calibrate(obs: BoardObservations, inlier: np.ndarray, focal_px: float, seed: np.ndarray | None = None,
+               fixed_terms: int = 0):
     """(params (8,), residuals (N, H*W, 2) of every seen corner, poses (N, 6) Rodrigues r then t);
-    ``seed``: params to start from (default: ``focal_px``, the centred principal point, no distortion)."""
+    ``seed``: params to start from (default: ``focal_px``, the centred principal point, no distortion);
+    ``fixed_terms``: Kannala-Brandt's last terms held at 0 (1: k4; 2: k3 and k4), the others solved."""
     import cv2
     board_pts = obs.board_points_m()
     objp, imgp = [], []
@@ -35,7 +47,10 @@ def _calibrate(obs: BoardObservations, inlier: np.ndarray, focal_px: float, seed
     if seed is not None:
         K = np.array([[seed[0], 0, seed[2]], [0, seed[1], seed[3]], [0, 0, 1.0]])
         D = np.asarray(seed[4:8], float).reshape(4, 1).copy()
-    flags = cv2.fisheye.CALIB_RECOMPUTE_EXTRINSIC | cv2.fisheye.CALIB_FIX_SKEW | cv2.fisheye.CALIB_USE_INTRINSIC_GUESS
+    if fixed_terms:
+        D[4 - fixed_terms:] = 0.0
+    flags = cv2.fisheye.CALIB_RECOMPUTE_EXTRINSIC | cv2.fisheye.CALIB_FIX_SKEW | cv2.fisheye.CALIB_USE_INTRINSIC_GUESS \
+        | _fix_flags(fixed_terms)
     crit = (cv2.TERM_CRITERIA_COUNT + cv2.TERM_CRITERIA_EPS, 200, 1e-12)
     try:
         _, K, D, rvecs, tvecs = cv2.fisheye.calibrate(objp, imgp, (w, h), K, D, flags=flags, criteria=crit)
@@ -60,7 +75,11 @@ def _per_image(res: np.ndarray, inlier: np.ndarray):
     return per, float(np.sqrt(d2.sum() / max(inlier.sum(), 1)))
 
 
-def solve(obs: BoardObservations, *, focal_px: float, max_image_rejections: int = 3) -> Solution:
+def solve(obs: BoardObservations, *, focal_px: float, max_image_rejections: int = 3,
+          fixed_terms: int = 0) -> Solution:
+    """Kannala-Brandt solved by cv2.fisheye.calibrate from ``obs``, outlier corners and images rejected;
+    ``fixed_terms``: its last terms held at 0 (1: k4; 2: k3 and k4; lens_choice.py tries them where
+    the four-term fit folds inside the image)."""
     keep = obs.counts() >= MIN_CORNERS_PER_IMAGE
     rejected = [RejectedImage(nm, float("nan"), f"fewer than {MIN_CORNERS_PER_IMAGE} corners")
                 for nm, k in zip(obs.names, keep) if not k]
@@ -68,14 +87,14 @@ def solve(obs: BoardObservations, *, focal_px: float, max_image_rejections: int 
     _check_enough(obs)
     inlier = obs.seen()
     for _round in range(max_image_rejections + 1):
-        params, res, poses = _calibrate(obs, inlier, focal_px)
+        params, res, poses = _calibrate(obs, inlier, focal_px, fixed_terms=fixed_terms)
         mag = np.linalg.norm(res, axis=-1)
         sigma = 1.4826 * np.nanmedian(np.abs(mag[inlier])) if inlier.any() else 0.0
         outl = obs.seen() & (mag > max(CORNER_OUTLIER_SIGMAS * sigma, CORNER_OUTLIER_FLOOR_PX))
         new_inlier = obs.seen() & ~outl
         if (new_inlier != inlier).any():
             inlier = new_inlier
-            params, res, poses = _calibrate(obs, inlier, focal_px)
+            params, res, poses = _calibrate(obs, inlier, focal_px, fixed_terms=fixed_terms)
         per, rms = _per_image(res, inlier)
         med = float(np.median(per))
         bad = (per > IMAGE_OUTLIER_FACTOR * med) & (per > IMAGE_OUTLIER_FLOOR_PX)
@@ -92,8 +111,9 @@ def solve(obs: BoardObservations, *, focal_px: float, max_image_rejections: int 
     corners = [(obs.names[i], int(k % w), int(k // w), float(np.linalg.norm(res[i, k])))
                for i, k in zip(*np.nonzero(obs.seen() & ~inlier))]
     sol = Solution(kb.NAME, params, obs.imagersize, obs, {}, rms, per, res, inlier, rejected, corners,
-                   solver="opencv", board_rt=poses)
-    sol.notes.append("OpenCV fisheye (Kannala-Brandt); no projection uncertainty (mrcal computes that "
+                   solver="opencv", board_rt=poses, fixed_terms=fixed_terms)
+    held = ("", "; k4 held at 0", "; k3 and k4 held at 0")[fixed_terms]
+    sol.notes.append(f"OpenCV fisheye (Kannala-Brandt{held}); no projection uncertainty (mrcal computes that "
                      "from its own solve only)")
     return sol
 
@@ -104,7 +124,7 @@ def resolve(solution: Solution, obs: BoardObservations) -> Solution:
     if list(obs.names) != list(solution.observations.names):
         raise SolveError("resolve: the observations are not the solution's views")
     params, res, poses = _calibrate(obs, solution.inlier, float(solution.intrinsics[0]),
-                                    seed=np.asarray(solution.intrinsics, float))
+                                    seed=np.asarray(solution.intrinsics, float), fixed_terms=solution.fixed_terms)
     per, rms = _per_image(res, solution.inlier)
     return dataclasses.replace(solution, intrinsics=params, observations=obs, rms_px=rms, per_image_rms_px=per,
                                residuals=res, board_rt=poses, rejected_images=list(solution.rejected_images),

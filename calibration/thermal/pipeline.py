@@ -169,7 +169,13 @@ def _choose(obs: BoardObservations, o8, focal_px: float, nominal_corner_angle_de
         except Exception:      # noqa: BLE001 - mrcal raises plain errors on real data; OPENCV8 is solved
             return None
 
-    return lc.choose_default(o8, kb, opencv5, nominal_corner_angle_deg)
+    def kb_held(n):
+        try:
+            return opencv_solver.solve(obs, focal_px=focal_px, fixed_terms=n)
+        except SolveError:
+            return None
+
+    return lc.choose_default(o8, kb, opencv5, nominal_corner_angle_deg, kb_held)
 
 
 def calibrate(images: str, board: tuple[int, int], square_m: float, *, solver: str, lens_model: str | None,
