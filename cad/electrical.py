@@ -5,7 +5,8 @@ Every number is read from the rig description (each part's ``power_w``, ``supply
 ``rating_a``, ``rating_dc_v``, ``efficiency``, ``cutoff_v``, ``sync_input_v``, the converter's
 ``dims.input_fuse_max_a`` where its datasheet gives it, and ``sync.level_v``); the
 only constants here are engineering rules (fuse margin, the ATO value series, the Jetson header's 3.3 V
-logic), named below. The battery current is taken at the pack's cut-off voltage: the lowest voltage the
+logic and what its pins may source, with that figure's provenance), named below; the button LED's forward
+voltage and series resistor are its ``dims`` where the rig gives them. The battery current is taken at the pack's cut-off voltage: the lowest voltage the
 load sees, so the highest current for the same power.
 """
 from __future__ import annotations
@@ -22,6 +23,17 @@ FUSE_MARGIN = 1.25
 ATO_VALUES_A = (1, 2, 3, 5, 7.5, 10, 15, 20, 25, 30, 35, 40)
 #: the Jetson AGX Orin devkit's 40-pin header GPIOs are 3.3 V logic (NVIDIA devkit carrier board spec)
 GPIO_V = 3.3
+#: What one header GPIO may source. No NVIDIA figure for the AGX Orin devkit's 40-pin header drive was found
+#: (shared/reference/*.md; the search tool's pages and issues). Jetson devkits bring the header out through
+#: TXB0108-type auto-direction level shifters (an NVIDIA forum measurement on a Xavier NX devkit: the pin fell
+#: to 2.0 V on 6.4 kOhm, 0.31 mA, forums.developer.nvidia.cn/t/jetson-xavier-nano/27654; NOT confirmed for the
+#: AGX Orin devkit: read its carrier board specification). TI's TXB0108 datasheet (SCES643I, application
+#: information, ti.com) puts a 4 kOhm resistor in series with each output and asks for external loads above
+#: 50 kOhm: the translator vendor's figure, used here with that provenance.
+TXB0108_MIN_LOAD_KOHM = 50.0
+GPIO_SOURCE_MAX_MA = GPIO_V / TXB0108_MIN_LOAD_KOHM
+GPIO_SOURCE_SOURCE = ("TI TXB0108 datasheet SCES643I: external load > 50 kOhm; the devkit's header level shifter, "
+                      "no NVIDIA AGX Orin figure found")
 
 
 @dataclass(frozen=True)
@@ -156,6 +168,36 @@ def led_check(rig) -> Result:
                                             f"{GPIO_V:g} V GPIO")
 
 
+def led_current_check(rig) -> Result:
+    """The record button's LED current, (3.3 V - its forward voltage) / its series resistor
+    (``parts.<button>.dims.led_forward_v``, ``led_series_resistor_ohm``), against what the header pin may
+    source (:data:`GPIO_SOURCE_MAX_MA`), or, when the LED is switched by a transistor whose gate the pin
+    drives, against that driver's rating (``dims.led_driver_max_ma``). A button that gives neither figure
+    passes with a line saying its current was not checked (as the converter's fuse limit)."""
+    pid = part_of_kind(rig, "button")
+    dims = rig.part(pid).dims
+    pin = rig.desc.recording.button.led_pin
+    vf, r = dims.get("led_forward_v"), dims.get("led_series_resistor_ohm")
+    limit = f"the header pin may source {GPIO_SOURCE_MAX_MA:.3f} mA ({GPIO_SOURCE_SOURCE})"
+    if vf is None or r is None:
+        return Result("button LED current", True, f"LED current of {pid} NOT checked: parts.{pid}.dims.led_forward_v and "
+                      f"led_series_resistor_ohm not given; {limit}, so an LED lit straight from GPIO pin {pin} needs a "
+                      "transistor driver")
+    ma = max(GPIO_V - vf.value, 0.0) / r.value * 1000.0
+    how = f"{ma:.2f} mA (({GPIO_V:g} V - {vf.value:g} V) / {r.value:g} ohm, parts.{pid}.dims)"
+    drv = dims.get("led_driver_max_ma")
+    if drv is not None:
+        ok = ma <= drv.value
+        return Result("button LED current", ok, f"LED of {pid} draws {how} through its transistor driver rated "
+                      f"{drv.value:g} mA (parts.{pid}.dims.led_driver_max_ma)" + ("" if ok else ": OVER its rating")
+                      + f"; GPIO pin {pin} drives only the driver's gate")
+    if ma <= GPIO_SOURCE_MAX_MA:
+        return Result("button LED current", True, f"LED of {pid} draws {how} from GPIO pin {pin}: within what {limit}")
+    return Result("button LED current", False, f"LED of {pid} draws {how} from GPIO pin {pin}, more than {limit}: "
+                  f"switch it with a transistor (an N-MOSFET low-side switch, its gate on pin {pin}) and give its "
+                  f"rating as parts.{pid}.dims.led_driver_max_ma")
+
+
 def cutoff_check(rig, counts: Mapping[str, int]) -> Result:
     """The under-voltage cut-off: switching the fused current at up to the pack's full voltage, and
     powered across the pack's whole range down to the cut-off it must act at."""
@@ -187,4 +229,4 @@ def gland_check(rig) -> Result:
 
 def electrical_checks(rig, counts: Mapping[str, int]) -> list[Result]:
     return power_checks(rig, counts) + [converter_fuse_check(rig, counts), cutoff_check(rig, counts), gland_check(rig),
-                                        sync_check(rig), led_check(rig)]
+                                        sync_check(rig), led_check(rig), led_current_check(rig)]

@@ -6,7 +6,7 @@ and the Boson sync breakouts, measured on the placed solids.
   than its thread, and smaller than the body's shoulder, which seals against the floor's outer face;
 - **locknut socket**: a deep socket on the locknut (across its corners plus ``SOCKET_WALL_MM`` a side,
   ``SOCKET_LENGTH_MM`` long, up the gland's axis from the floor) clear of every part installed at the
-  guide's step that fits the gland (or before it);
+  guide's step that fits the gland (or before it), the tray's own floor bosses included;
 - **breakout plugs**: behind each sync breakout, the USB-C plug and the sync harness's connector need
   ``parts.boson_640.dims.usb_connector_clearance_mm`` of room (12 x 12 mm across, the Boson's own
   USB keep-out): that box clear of every part; and the board seated on the core's rear face;
@@ -22,9 +22,8 @@ from cad.geom import TOUCH_MM3, Bounds, bounds_of, box, common_volume_mm3, cylin
 
 from .assembly import Assembly
 from .assembly_order import load_steps
+from .layout.power import SOCKET_WALL_MM    # the layout keeps the floor's bosses out of the socket's path
 
-#: a deep socket's wall around the nut it fits (a 15 mm socket is about 21 mm across: estimate)
-SOCKET_WALL_MM = 2.5
 #: how far up from the floor the socket and its ratchet need a straight path (estimate)
 SOCKET_LENGTH_MM = 45.0
 #: the plug room behind a breakout is this wide and tall (the USB-C overmould and the 2-pin housing)
@@ -98,7 +97,9 @@ def power_part_problems(asm: Assembly, extra: list[tuple[str, cq.Shape]] = ()) -
     steps = load_steps(names)
     at = next((s for s in steps if "cable_gland" in s.nodes), None)
     installed = [n for s in steps if at is not None and s.number <= at.number for n in s.nodes]
-    installed = [n for n in installed if n not in ("cable_gland", "case_lower")] + [n for n, _ in extra]
+    # the tray itself counts too: the envelope starts 0.01 mm over the floor, so what of case_lower it meets
+    # stands on the floor (a boss, a rib, a wall) in the socket's way
+    installed = [n for n in installed if n != "cable_gland"] + [n for n, _ in extra]
     hits = _hits(socket_envelope(asm), installed, shapes)
     sock = g.nut_d_mm + 2 * SOCKET_WALL_MM
     details.append(f"locknut socket {sock:.1f} mm x {SOCKET_LENGTH_MM:g} mm up the gland's axis at step "
@@ -121,6 +122,6 @@ def power_part_problems(asm: Assembly, extra: list[tuple[str, cq.Shape]] = ()) -
 def cutoff_mount(asm: Assembly) -> list[str]:
     """The cut-off board sits on its bosses: its underside on their tops."""
     p = asm.layout.power
-    top = asm.layout.case.interior.lo[2] + max(h for *_, h in p.cutoff_bosses)
+    top = asm.layout.case.interior.lo[2] + max(h for *_, h in p.cutoff_seats)
     z = float(p.cutoff_pose.t[2])
     return [] if abs(z - top) < MEASURE_TOL_MM else [f"undervoltage_cutoff: its board is {z - top:+.2f} mm off its bosses"]

@@ -1,6 +1,6 @@
-"""Electronics of the power and sync chain: the DC-DC converter and the inline blade fuse holder
-(boxes), the under-voltage cut-off (a module board with its mounting holes) and the Boson sync
-breakout (a board on the core's rear connector).
+"""Electronics of the power and sync chain: the DC-DC converter (a box), the blade fuse holder (a body
+on a screw tab at each end), the under-voltage cut-off (a module board with its mounting holes) and the
+Boson sync breakout (a board on the core's rear connector).
 
 Frame of the boxes and the board: origin at the centre of the bottom face. The converter's bottom M3
 threads (``parts.dc_converter.mounting``) are tapped in its base plate (not cut here).
@@ -34,6 +34,70 @@ class BoxPart(BoughtPart):
 
     def mount_points(self) -> list[tuple[float, float, float]]:
         return [(u, v, 0.0) for u, v in self.mount_uv_mm]
+
+
+#: The fuse holder's screw tabs, used while the rig gives the holder no ``mounting`` (``parts.<fuse>.mounting``,
+#: face bottom, wins once written): an ATO holder with a screw tab at each end of its body. No datasheet
+#: or drawing of such a holder was read (bom/parts.yaml blade_fuse: no holder with a part number was
+#: found), so every figure here is an ESTIMATE of a common one: measure the holder bought and write its
+#: tab holes into config/rig.yaml before printing the tray.
+#: tab holes' centres apart, along the holder (estimate)
+FUSE_TAB_HOLE_SPACING_MM = 32.0
+#: the tab holes' diameter (estimate: an M3 clearance)
+FUSE_TAB_HOLE_D_MM = 3.5
+#: the tabs' thickness: what the screw clamps (estimate)
+FUSE_TAB_THICKNESS_MM = 2.0
+#: the tabs' width across the holder (estimate)
+FUSE_TAB_WIDTH_MM = 10.0
+#: the flat of each tab from its hole's centre in to the body (estimate: room for a head 8 mm across)
+FUSE_TAB_FLAT_MM = 4.0
+
+
+@dataclass(frozen=True)
+class FuseHolder(BoughtPart):
+    """The blade fuse holder: its body between two screw tabs that lie on the floor's bosses, each with a
+    through hole. Frame: origin at the centre of the tabs' underside, x along the holder, z up. ``source``
+    says where the tab holes come from (the rig's mounting, or the estimates above)."""
+    mount_uv_mm: tuple[tuple[float, float], ...] = ()
+    tab_mm: float = FUSE_TAB_THICKNESS_MM
+    hole_d_mm: float = FUSE_TAB_HOLE_D_MM
+    tab_width_mm: float = FUSE_TAB_WIDTH_MM
+    thread: str | None = None      # the screw the rig's mounting names; None: the floor insert's
+    source: str = ""
+
+    @classmethod
+    def from_rig(cls, rig: Rig, part_id: str) -> "FuseHolder":
+        ms = [m for m in rig.part(part_id).mounting if m.face.value == "bottom"]
+        if ms:
+            m = ms[0]
+            return cls(part_id, envelope(rig, part_id), part_colour("electronics"), mount_uv_mm=tuple(m.positions_mm),
+                       tab_mm=m.depth_mm, thread=m.thread,
+                       source=f"parts.{part_id}.mounting ({m.source}, {m.confidence.value})")
+        s = FUSE_TAB_HOLE_SPACING_MM / 2
+        return cls(part_id, envelope(rig, part_id), part_colour("electronics"), mount_uv_mm=((-s, 0.0), (s, 0.0)),
+                   source="estimate (cad/bought/electronics.py FUSE_TAB_*: no holder drawing read)")
+
+    def bounds(self) -> Bounds:
+        x, y, z = self.size
+        return Bounds((-x / 2, -y / 2, 0.0), (x / 2, y / 2, z))
+
+    def mount_points(self) -> list[tuple[float, float, float]]:
+        """The tab holes' centres on the tabs' underside (where the screws' inserts are, below)."""
+        return [(u, v, 0.0) for u, v in self.mount_uv_mm]
+
+    def body(self) -> Bounds:
+        """The holder's body between the tabs' flats."""
+        x, y, z = self.size
+        half = min([x / 2] + [abs(u) - FUSE_TAB_FLAT_MM for u, _ in self.mount_uv_mm])
+        return Bounds((-half, -y / 2, 0.0), (half, y / 2, z))
+
+    def build(self) -> cq.Shape:
+        x, _, _ = self.size
+        w = self.tab_width_mm
+        tabs = Bounds((-x / 2, -w / 2, 0.0), (x / 2, w / 2, self.tab_mm)).solid()
+        for u, v, _ in self.mount_points():
+            tabs = tabs.cut(cylinder(self.hole_d_mm, self.tab_mm + 0.2, (u, v, -0.1)))
+        return tabs.fuse(self.body().solid()).clean()
 
 
 @dataclass(frozen=True)

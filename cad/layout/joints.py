@@ -144,7 +144,7 @@ class _Joints:
 def place_joints(rig: Rig, c: Constants, fits: Fits, *, cameras: Cameras, cooling: Cooling, mounts: CameraMounts,
                  compute: Compute, power: Power, case: Case, handles: Handles) -> tuple[Joint, ...]:
     """Every joint, in assembly order: case split, handles, thermal bar, heat sinks, ZED mount and
-    camera, fans, Orin, capture card, battery dock, converter."""
+    camera, fans, Orin, capture card, battery dock, converter, cut-off, fuse holder."""
     e = rig.desc.enclosure
     j = _Joints(rig, c, fits)
     wall, fo = fits.wall, case.outer.lo[2]
@@ -243,4 +243,9 @@ def place_joints(rig: Rig, c: Constants, fits: Fits, *, cameras: Cameras, coolin
     for k, pt in enumerate(power.cutoff.mount_points()):
         p = power.cutoff_pose.apply(np.array(pt))
         j.insert(f"cutoff_{k}", (p[0], p[1], p[2] + power.cutoff.board_mm), DOWN, power.cutoff.board_mm, [], "case_lower")
+    # fuse holder: down through each screw tab into an insert in its boss (cad/layout/power.py)
+    fuse = power.fuse
+    for k, pt in enumerate(fuse.mount_points()):
+        p = power.fuse_pose.apply(np.array(pt))
+        j.insert(f"fuse_{k}", (p[0], p[1], p[2] + fuse.tab_mm), DOWN, fuse.tab_mm, [], "case_lower")
     return tuple(j.out)

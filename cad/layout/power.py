@@ -1,6 +1,6 @@
-"""Power and sync: the DC-DC converter on the right wall, the fuse on the floor beside the Orin, the
-cable gland that brings the battery leads up through the floor just ahead of the fuse, the
-under-voltage cut-off board ahead of the gland on two bosses of the floor, the Makita battery under
+"""Power and sync: the DC-DC converter on the right wall, the fuse holder beside the Orin on two bosses
+of the floor (its screw tabs on them), the cable gland that brings the battery leads up through the
+floor just ahead of the fuse, the under-voltage cut-off board ahead of the gland on two more bosses, the Makita battery under
 the case in its dock adapter (screwed through a printed mount plate to the floor), and the sync
 breakout board on each Boson's rear connector. Rig frame, mm."""
 from __future__ import annotations
@@ -13,7 +13,8 @@ from platform_tools.rig import Rig
 from platform_tools.rig.frames import Pose
 
 from cad.bought.base import part_of_kind
-from cad.bought.electronics import BoardPart, BoxPart, SyncBreakout
+from cad.bought.electronics import BoardPart, BoxPart, FuseHolder, SyncBreakout
+from cad.bought.fasteners import thread_diameter_mm
 from cad.bought.gland import CableGland
 from cad.bought.makita_adapter import MakitaAdapter
 from cad.bought.makita_battery import MakitaBattery
@@ -24,16 +25,23 @@ from .case import Shell
 from .compute import Compute
 from .fits import Fits
 
-#: wall beside the cut-off bosses' inserts, beyond the printer's minimum wall, on each side
+#: wall beside the floor bosses' inserts (the cut-off's and the fuse holder's), beyond the printer's
+#: minimum wall, on each side
 CUTOFF_BOSS_WALL_EXTRA_MM = 1.0
+#: a deep socket's wall around the gland's locknut (a 15 mm socket is about 21 mm across: estimate); the
+#: floor bosses beside the gland stand clear of that socket's path (cad/passthrough.py checks it on the solid)
+SOCKET_WALL_MM = 2.5
+
+#: a floor boss: (x, y, diameter, height), standing on the floor's inner face (rig frame, mm)
+Boss = tuple[float, float, float, float]
 
 
 @dataclass(frozen=True)
 class Power:
     converter: BoxPart
     converter_pose: Pose
-    fuse: BoxPart
-    fuse_pose: Pose
+    fuse: FuseHolder
+    fuse_pose: Pose             # origin at the tabs' underside, on its bosses' tops
     adapter: MakitaAdapter
     adapter_pose: Pose
     battery: MakitaBattery
@@ -43,7 +51,8 @@ class Power:
     gland_pose: Pose            # z into the case, origin on the floor's outer face
     cutoff: BoardPart
     cutoff_pose: Pose
-    cutoff_bosses: tuple[tuple[float, float, float, float], ...]   # (x, y, diameter, height) on the floor
+    cutoff_seats: tuple[Boss, ...]    # the cut-off's bosses, one under each of its holes
+    fuse_bosses: tuple[Boss, ...]     # the fuse holder's, one under each tab hole
     breakout: SyncBreakout
     breakout_poses: dict[str, Pose]   # by side: on the Boson's rear face
 
@@ -51,6 +60,11 @@ class Power:
     def gland_hole(self) -> tuple[tuple[float, float, float], float]:
         """Where the gland's hole crosses the floor's outer face, and its diameter (the gland's table)."""
         return tuple(self.gland_pose.t), self.gland.hole_d_mm
+
+    @property
+    def floor_bosses(self) -> tuple[Boss, ...]:
+        """Every boss on the floor: the cut-off's, then the fuse holder's."""
+        return self.cutoff_seats + self.fuse_bosses
 
     @property
     def converter_box(self) -> Bounds:
@@ -71,8 +85,13 @@ def place_power(rig: Rig, fits: Fits, shell: Shell, compute: Compute, cameras: C
     # face blows its exhaust over and past it to the lid's side slots (cad/layout/case.py sizes the strip)
     conv_pose = Pose.from_xyz_rpy_deg((orin_box.hi[0] - cx / 2, shell.interior.lo[1], floor_z + cy / 2),
                                       (-90.0, 0, 0))
-    fuse = BoxPart.from_rig(rig, part_of_kind(rig, "fuse"))
-    fuse_pose = pose_xyz(orin_box.lo[0] + fuse.size[0] / 2 + clear, orin_box.hi[1] + clear + fuse.size[1] / 2, floor_z)
+    # the fuse holder's tabs on two bosses of the floor, an insert in each (as the cut-off's): its screws
+    # go down through the tabs from inside the tray
+    boss_h = fits.insert_plate_mm
+    boss_d = fits.insert.outer_diameter_mm + 2 * (fits.min_wall + CUTOFF_BOSS_WALL_EXTRA_MM)
+    fuse = _fuse_holder(rig, fits)
+    fuse_pose = pose_xyz(orin_box.lo[0] + fuse.size[0] / 2 + clear, orin_box.hi[1] + clear + fuse.size[1] / 2,
+                         floor_z + boss_h)
     adapter = MakitaAdapter.from_rig(rig, part_of_kind(rig, "battery_adapter"))
     battery = MakitaBattery.from_rig(rig, part_of_kind(rig, "battery"))
     ax, ay, az = adapter.size
@@ -83,19 +102,51 @@ def place_power(rig: Rig, fits: Fits, shell: Shell, compute: Compute, cameras: C
     # the floor strip between the Orin and the left wall, ahead of the fuse: the gland's locknut, then the cut-off
     strip_y = (orin_box.hi[1] + clear + shell.interior.hi[1] - clear) / 2
     gland = replace(CableGland.from_rig(rig, part_of_kind(rig, "gland")), wall_mm=fits.wall)
-    gx = fuse_pose.t[0] + fuse.size[0] / 2 + clear + gland.nut_d_mm / 2
+    # the locknut's socket needs its path down to the floor: no boss inside it (the fuse holder's behind it, the
+    # cut-off's ahead of it), besides the bodies' own clearance. The bosses may touch the socket's circle: the
+    # strip has no room for a gap (1 mm more each side put the cut-off's front into the left fan mount)
+    fuse_bosses = _bosses(fuse_pose, fuse.mount_points(), boss_d, boss_h)
+    reach = (gland.nut_d_mm + 2 * SOCKET_WALL_MM) / 2 + boss_d / 2     # socket axis to a boss's centre: touching
+    gx = max([fuse_pose.t[0] + fuse.size[0] / 2 + clear + gland.nut_d_mm / 2]
+             + [bx + _ahead(reach, by - strip_y) for bx, by, *_ in fuse_bosses])
     gland_pose = pose_xyz(gx, strip_y, shell.outer.lo[2])
     cutoff = BoardPart.from_rig(rig, part_of_kind(rig, "cutoff"))
-    boss_h = fits.insert_plate_mm
     cut_x = gx + gland.nut_d_mm / 2 + clear + cutoff.size[0] / 2
+    local = [np.asarray(pt, float) for pt in cutoff.mount_points()]          # in the board's frame, its centre at 0
+    cut_x = max([cut_x] + [gx + _ahead(reach, float(pt[1])) - float(pt[0]) for pt in local])
     cutoff_pose = pose_xyz(cut_x, strip_y, floor_z + boss_h)
-    boss_d = fits.insert.outer_diameter_mm + 2 * (fits.min_wall + CUTOFF_BOSS_WALL_EXTRA_MM)
-    bosses = tuple((float(p[0]), float(p[1]), boss_d, boss_h)
-                   for p in (cutoff_pose.apply(np.array(pt)) for pt in cutoff.mount_points()))
+    bosses = _bosses(cutoff_pose, cutoff.mount_points(), boss_d, boss_h)
     breakout = SyncBreakout.from_rig(rig, part_of_kind(rig, "interface_board"))
     rear = cameras.core.bounds().lo[0]
     breakouts = {side: t.pose @ pose_xyz(rear, 0.0, 0.0) for side, t in cameras.thermal.items()}
     return Power(converter=conv, converter_pose=conv_pose, fuse=fuse, fuse_pose=fuse_pose, adapter=adapter,
                  adapter_pose=adapter_pose, battery=battery, battery_pose=battery_pose, battery_mount=mount,
-                 gland=gland, gland_pose=gland_pose, cutoff=cutoff, cutoff_pose=cutoff_pose, cutoff_bosses=bosses,
+                 gland=gland, gland_pose=gland_pose, cutoff=cutoff, cutoff_pose=cutoff_pose, cutoff_seats=bosses,
+                 fuse_bosses=fuse_bosses,
                  breakout=breakout, breakout_poses=breakouts)
+
+
+def _ahead(reach: float, dy: float) -> float:
+    """How far along x two centres ``dy`` apart across must be to stand ``reach`` apart (0 when ``dy`` alone does)."""
+    return float(np.sqrt(max(reach * reach - dy * dy, 0.0)))
+
+
+def _bosses(pose: Pose, points, diameter: float, height: float) -> tuple[Boss, ...]:
+    """A boss of the floor under each of a part's mounting points (placed by ``pose``)."""
+    return tuple((float(p[0]), float(p[1]), diameter, height) for p in (pose.apply(np.array(pt)) for pt in points))
+
+
+def _fuse_holder(rig: Rig, fits: Fits) -> FuseHolder:
+    """The fuse holder, its tab screws the floor inserts' thread: refused (the rig key named) when its
+    mounting names another thread or its tab holes cannot pass that screw."""
+    from .constraints import DesignError, DesignProblem    # constraints builds the layout: import when called
+    fuse = FuseHolder.from_rig(rig, part_of_kind(rig, "fuse"))
+    thread = fits.insert.thread
+    key = f"parts.{fuse.part_id}.mounting"
+    if fuse.thread is not None and fuse.thread != thread:
+        raise DesignError([DesignProblem(key, f"the fuse holder's tabs take {fuse.thread} screws; the floor's inserts "
+                                              f"are {thread} (enclosure.insert)")])
+    if fuse.hole_d_mm < thread_diameter_mm(thread):
+        raise DesignError([DesignProblem(key, f"the fuse holder's {fuse.hole_d_mm:g} mm tab holes do not pass an "
+                                              f"{thread} screw")])
+    return fuse

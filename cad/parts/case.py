@@ -158,7 +158,7 @@ def case_spec(lay: Layout) -> CaseSpec:
     (gx, gy, gz), gd = lay.power.gland_hole
     holes += (Hole("case_lower", (gx, gy, gz - HOLE_LEAD_MM), (0.0, 0.0, 1.0), gd, lay.fits.wall + 2 * HOLE_LEAD_MM),)
     floor = lay.case.interior.lo[2]
-    bosses = tuple((x, y, floor, d, h) for x, y, d, h in lay.power.cutoff_bosses)
+    bosses = tuple((x, y, floor, d, h) for x, y, d, h in lay.power.floor_bosses)
     i = lay.case.interior
     ch = front_ledge_chamfer(lay.rig, lay.fits, lay.case, lay.cameras)
     chamfers = ((i.hi[0], i.hi[2], ch, i.lo[1], i.hi[1]),) if ch > 0 else ()

@@ -149,7 +149,7 @@ def test_power_and_sync_lines(bom_default):
     rows = read_bom(bom_default)
     lens = rows["boson_lens_4p9mm"]
     assert float(lens["cost"]) == 0 and "fitted to boson_640" in lens["price_note"]
-    for key in ("makita_charger", "wifi_pigtail", "fuse_holder_fixings", "power_splices"):
+    for key in ("makita_charger", "wifi_pigtail", "power_splices"):   # the fuse holder's fixings: counted from the model
         assert float(rows[key]["quantity"]) > 0, key
 
 
@@ -422,3 +422,28 @@ def test_the_docs_count_what_the_bom_says(bom_default):
                                             status.count("named by its vendor, not verified here"),
                                             status.count("made from the CAD model"),
                                             status.count("generic: no MPN verified")]
+
+
+def test_the_fuse_holder_fixings_are_counted_from_the_model(bom_default, tmp_path, rig_text):
+    """No typed-in fixings line for the fuse holder: its tab screws and the inserts of its bosses are CAD
+    nodes, counted on the M3 screw and insert lines; a holder with a third tab hole (its mounting given in the
+    rig) adds one screw of that length and one insert to the bill."""
+    from cad.layout import layout
+    from .conftest import build_py
+    a = read_bom(bom_default)
+    assert "fuse_holder_fixings" not in a
+    joints = [j for j in layout(load_rig()).joints if j.name.startswith("fuse_")]
+    assert len(joints) == 2
+    key = joints[0].screw.bom_key
+    assert all(j.screw.bom_key == key for j in joints) and a[key]["source"] == "CAD assembly"
+    data = yaml.safe_load(rig_text)
+    data["parts"]["blade_fuse"]["mounting"] = [{"face": "bottom", "thread": "M3", "depth_mm": 2,
+                                                "positions_mm": [[-16, 0], [16, -3], [16, 3]],
+                                                "source": "estimate", "confidence": "estimate"}]
+    path = tmp_path / "rig.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    r = build_py("bom", "--out", str(tmp_path / "out"), "--rig", str(path), "-q")
+    assert r.returncode == 0, r.stderr
+    b = read_bom(tmp_path / "out")
+    assert float(b[key]["quantity"]) == float(a[key]["quantity"]) + 1
+    assert float(b["m3_insert"]["quantity"]) == float(a["m3_insert"]["quantity"]) + 1

@@ -106,7 +106,9 @@ def centreline(mesh: trimesh.Trimesh, step_mm: float = STEP_MM) -> tuple[np.ndar
     pts, d = [a.centre], -a.normal
     for _ in range(100000):
         q = pts[-1] + step_mm * d
-        if (q - b.centre) @ b.normal > -step_mm / 2:      # the next section would reach the far cap's plane
+        # the next section would reach the far cap's plane, at the far cap (a route may start beyond that plane
+        # and come back to it: the power leads into the switch's tabs and the converter's rear end)
+        if (q - b.centre) @ b.normal > -step_mm / 2 and np.linalg.norm(q - b.centre) < 2 * r + step_mm:
             break
         c = ring_centre(plane_cut(mesh, q, d), q, 1.5 * r)
         if c is None:

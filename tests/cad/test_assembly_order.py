@@ -100,3 +100,31 @@ def test_the_check_reads_the_steps_as_the_guide_does(asm):
     guide = load_guide(asm, build_bom(asm, load_catalogue(asm.rig, None)))
     mine = load_steps(_names(asm), STEPS)
     assert [(s.id, list(s.nodes)) for s in mine] == [(s.id, s.nodes) for s in guide.steps]
+
+
+def _moved(asm, pattern: str, to: str):
+    """The guide's steps with the nodes matching ``pattern`` moved to step ``to``."""
+    import fnmatch
+    steps = load_steps(_names(asm))
+    moving = [n for s in steps for n in s.nodes if fnmatch.fnmatch(n, pattern)]
+    assert moving
+    return [dataclasses.replace(s, nodes=tuple(n for n in s.nodes if n not in moving)
+                                + (tuple(moving) if s.id == to else ())) for s in steps]
+
+
+@pytest.mark.slow
+def test_the_fuse_holder_screws_are_driven_at_the_power_step(asm):
+    """The fuse holder's two tab screws are in the check, driven down at the step that fits the holder, with a
+    clear path; driven after the lid is on (a wrong order), the lid's roof blocks both (and the Wi-Fi antenna's
+    bulkhead, fitted in the controls step, is over them too)."""
+    fuse = {f"screw_fuse_{k}" for k in range(2)}
+    r = checks.check_assembly_order(asm)
+    assert fuse <= set(r.data) and all(r.data[s]["step"] == "power" and not r.data[s]["blocked_by"] for s in fuse)
+    steps = {n: s.id for s in load_steps(_names(asm)) for n in s.nodes}
+    assert steps["blade_fuse"] == steps["insert_fuse_0"] == "power"
+    late = checks.check_assembly_order(asm, steps=_moved(asm, "screw_fuse_*", "lid"))
+    assert not late.ok
+    assert {s for s, d in late.data.items() if d["blocked_by"]} == fuse
+    for s in fuse:
+        assert "case_lid" in late.data[s]["blocked_by"]
+        assert any(p.startswith(f"{s} (step") and "'lid'" in p and "blocked by case_lid" in p for p in late.details)

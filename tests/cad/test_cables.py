@@ -258,3 +258,82 @@ def test_a_usb_plug_longer_than_the_room_behind_the_breakout_is_one_line(asm, mo
     rep = cables.cable_report(asm, only=[])
     assert rep.problems == [f"cad/bought/cables.yaml: kinds.usb_lead.plug_mm is {room + 3:g} mm but the room behind each "
                             f"breakout is parts.boson_640.dims.usb_connector_clearance_mm = {room:g} mm"]
+
+
+POWER_LEADS = ("fuse_in", "fuse_switch", "switch_cutoff", "battery_minus", "cutoff_converter_plus",
+               "cutoff_converter_minus")
+
+
+@pytest.mark.slow
+def test_the_power_chain_is_routed_clear_with_the_lids_slack(asm, results):
+    """The power leads after the gland (gland splice -> fuse -> switch in the lid -> cut-off -> converter, and
+    the battery minus to the cut-off) are routes of the cable check: 18 AWG wire, every bend at least 4 x its
+    diameter, clear of every part and cable (the rig's check passes with them). Each ends on its parts' faces
+    as placed; the two leads to the switch cross the case's split and are bought the lid's opening slack
+    longer than their route and the wire's service slack."""
+    from cad.cables import LID_OPENING_SLACK_MM, cable_lengths
+    assert results["cables"].ok, results["cables"].details[:12]
+    lay = asm.layout
+    rs = {r.name: r for r in routes(asm)}
+    assert set(POWER_LEADS) <= set(rs)
+    k = KINDS["power_lead"]
+    for name in POWER_LEADS:
+        r = rs[name]
+        assert r.kind == "power_lead" and r.catalogue == "power_wire" and r.radius_mm >= k.min_bend_radius_mm
+        assert not path_of(r, k).problems, name
+    # ends where the parts are: the fuse holder's body ends, the switch's inner end, the cut-off block's top,
+    # the converter's rear end
+    from cad.geom import placed_bounds
+    p = lay.power
+    fuse = placed_bounds(p.fuse.body(), p.fuse_pose)
+    sw, pose = lay.controls["power_switch"]
+    body = placed_bounds(sw.body_bounds(), pose)
+    blk = placed_bounds(p.cutoff.components(), p.cutoff_pose)
+    assert rs["fuse_in"].points[0][0] == pytest.approx(fuse.hi[0]) and rs["fuse_switch"].points[0][0] == pytest.approx(fuse.lo[0])
+    assert rs["fuse_switch"].points[-1][0] == pytest.approx(body.hi[0]) == rs["switch_cutoff"].points[0][0]
+    for name in ("switch_cutoff", "battery_minus"):
+        assert rs[name].points[-1][2] == pytest.approx(blk.hi[2])
+    for name in ("cutoff_converter_plus", "cutoff_converter_minus"):
+        assert rs[name].points[0][2] == pytest.approx(blk.hi[2]) and rs[name].points[-1][0] == pytest.approx(p.converter_box.lo[0])
+    # the switch's leads run from the tray (z under the split) to the lid (over it)
+    split = lay.case.split_z
+    for name in ("fuse_switch", "switch_cutoff"):
+        zs = [pt[2] for pt in rs[name].points]
+        assert min(zs) < split < max(zs)
+    rows = {c["route"]: c for c in cable_lengths(asm)}
+    for name in POWER_LEADS:
+        lid = LID_OPENING_SLACK_MM if name in ("fuse_switch", "switch_cutoff") else 0.0
+        c = rows[name]
+        assert c["slack_mm"] == k.service_slack_mm + lid
+        assert c["bought_mm"] == math.ceil((c["route_mm"] + k.service_slack_mm + lid) / 10.0) * 10.0
+        assert c["bought_mm"] >= path_of(rs[name], k).length_mm + k.service_slack_mm + lid
+
+
+@pytest.mark.slow
+def test_a_power_lead_under_the_devkits_top_fails(asm):
+    """The switch-to-cut-off lead crosses the case between the devkit's top and the capture card: laid 10 mm
+    lower it runs through the devkit, and the check names both."""
+    from cad.checks import check_cables
+    r = next(x for x in routes(asm) if x.name == "switch_cutoff")
+    z = r.points[1][2] - 10.0
+    low = dataclasses.replace(r, name="test_low", points=(r.points[0],) + tuple((x, y, z) for x, y, _ in r.points[1:4])
+                              + (r.points[4],))
+    res = check_cables(asm, only=[low])
+    assert not res.ok
+    assert any(p.startswith("cable test_low") and "jetson_agx_orin" in p for p in res.details), res.details[:4]
+    assert check_cables(asm, only=[r]).ok
+
+
+@pytest.mark.slow
+def test_the_power_wire_is_bought_from_the_routes(asm):
+    """The BOM's power_wire line counts one piece per power lead route, cut to the longest one's length
+    (route + slack, and the lid's slack on the switch's leads): no typed-in 2 m."""
+    from bom.bom import build_bom
+    from bom.catalogue import load_catalogue
+    from cad.cables import cable_lengths
+    bom = build_bom(asm, load_catalogue(asm.rig, None))
+    ln = bom.line("power_wire")
+    mine = [c for c in cable_lengths(asm) if c["catalogue"] == "power_wire"]
+    assert ln.source == "cable routes" and ln.unit == "pcs" and ln.quantity == len(mine) == len(POWER_LEADS)
+    longest = max(c["bought_mm"] for c in mine)
+    assert f"{longest:g} mm" in ln.part_number

@@ -82,3 +82,42 @@ def test_efficiency_sets_the_battery_current():
     a, b = budget(rig, COUNTS), budget(worse, COUNTS)
     assert b.load_w == pytest.approx(a.load_w)
     assert b.battery_w == pytest.approx(a.battery_w / 0.8) and b.battery_a == pytest.approx(a.battery_a / 0.8)
+
+
+def _rig_with_led(tmp_path, rig_text, **dims):
+    """config/rig.yaml with the record button's LED figures in its dims (edited as text, as a user's file)."""
+    import yaml
+    data = yaml.safe_load(rig_text)
+    for k, v in dims.items():
+        data["parts"]["record_button"].setdefault("dims", {})[k] = {"value": v, "source": "estimate", "confidence": "estimate"}
+    path = tmp_path / "rig.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return load_rig(path)
+
+
+def test_an_led_drawing_more_than_the_gpio_may_source_fails(tmp_path, rig_text):
+    """A red LED (2.0 V) on a 100 ohm resistor draws 13 mA from the 3.3 V pin, far over what the header's level
+    shifter may source: one line saying so, naming the pin's figure and asking for a transistor; every other
+    electrical check is unchanged. On a 47 kOhm resistor (0.03 mA) it passes; switched by a transistor rated
+    over its current it passes too, under the transistor's rating it fails."""
+    from cad.electrical import GPIO_SOURCE_MAX_MA
+    res = _by_name(_rig_with_led(tmp_path, rig_text, led_forward_v=2.0, led_series_resistor_ohm=100))
+    r = res["button LED current"]
+    assert not r.ok and len(r.text.splitlines()) == 1, r.text
+    assert "13.00 mA" in r.text and f"{GPIO_SOURCE_MAX_MA:.3f} mA" in r.text and "transistor" in r.text, r.text
+    assert "TXB0108" in r.text and "pin 31" in r.text
+    assert all(x.ok for n, x in res.items() if n != "button LED current")
+    assert (1.3 / 100 * 1000) > GPIO_SOURCE_MAX_MA
+    weak = _by_name(_rig_with_led(tmp_path, rig_text, led_forward_v=2.0, led_series_resistor_ohm=47000))
+    assert weak["button LED current"].ok, weak["button LED current"].text
+    driven = _by_name(_rig_with_led(tmp_path, rig_text, led_forward_v=2.0, led_series_resistor_ohm=100,
+                                    led_driver_max_ma=100))["button LED current"]
+    assert driven.ok and "driver" in driven.text, driven.text
+    small = _by_name(_rig_with_led(tmp_path, rig_text, led_forward_v=2.0, led_series_resistor_ohm=100,
+                                   led_driver_max_ma=5))["button LED current"]
+    assert not small.ok and "OVER its rating" in small.text
+
+
+def test_an_led_without_its_figures_says_its_current_was_not_checked():
+    r = _by_name(load_rig())["button LED current"]
+    assert r.ok and "NOT checked" in r.text and "led_series_resistor_ohm" in r.text and "transistor" in r.text

@@ -59,11 +59,55 @@ def test_cutoff_stands_on_its_bosses(asm):
     p, floor = asm.layout.power, asm.layout.case.interior.lo[2]
     tray = asm.node("case_lower").shape(asm.cache)
     ins = asm.layout.fits.insert
-    for x, y, d, h in p.cutoff_bosses:
+    for x, y, d, h in p.cutoff_seats:
         ring = (x + (ins.hole_diameter_mm + d) / 4, y, floor + h / 2)     # between the insert hole and the boss's edge
         assert tray.isInside(cq_vec(ring))
         assert not tray.isInside(cq_vec((x, y, floor + h - 1.0)))          # the insert's hole
-    assert p.cutoff_pose.t[2] == pytest.approx(floor + max(b[3] for b in p.cutoff_bosses))
+    assert p.cutoff_pose.t[2] == pytest.approx(floor + max(b[3] for b in p.cutoff_seats))
+
+
+def test_fuse_holder_stands_on_its_bosses(asm, rig, tmp_path):
+    """The fuse holder's tabs lie on two bosses of the tray, one under each tab hole, with an insert hole in
+    each: measured on the placed solids (the holder touches the tray and does not cut into it), on the tray's
+    exported STL (trimesh: a boss ring around an insert hole of the insert's table diameter under each tab
+    hole) and in the joints (a screw down through each tab into an insert of the boss)."""
+    from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+    from cad.geom import common_volume_mm3
+    lay = asm.layout
+    p, floor, ins = lay.power, lay.case.interior.lo[2], lay.fits.insert
+    fuse, tray = asm.node("blade_fuse").shape(asm.cache), asm.node("case_lower").shape(asm.cache)
+    d = BRepExtrema_DistShapeShape(fuse.wrapped, tray.wrapped)
+    d.Perform()
+    assert d.Value() < 1e-6                                      # in contact: no gap under the tabs ...
+    assert common_volume_mm3(fuse, tray) < 1e-3                  # ... and not sunk into the tray
+    holes = [tuple(p.fuse_pose.apply(np.array(pt))) for pt in p.fuse.mount_points()]
+    assert len(holes) == len(p.fuse_bosses) == 2
+    assert fuse.BoundingBox().zmin == pytest.approx(floor + lay.fits.insert_plate_mm, abs=1e-6)
+    mesh = _stl_mesh(asm, "case_lower", tmp_path)
+    for (hx, hy, hz), (bx, by, bd, bh) in zip(holes, p.fuse_bosses):
+        assert (bx, by) == pytest.approx((hx, hy)) and hz == pytest.approx(floor + bh)
+        assert bh >= ins.hole_depth_mm and bd > ins.outer_diameter_mm    # the boss holds the insert
+        loop = _loop_around(mesh, (0, 0, floor + bh / 2), (0, 0, 1), (hx, hy), ((1, 0, 0), (0, 1, 0)))
+        r = np.hypot(loop[:, 0] - hx, loop[:, 1] - hy)
+        assert r.max() == pytest.approx(ins.hole_diameter_mm / 2, abs=0.05) and r.min() > ins.hole_diameter_mm / 2 - 0.05
+        assert _inside(mesh, [(hx + (ins.hole_diameter_mm + bd) / 4, hy, floor + bh / 2)]).all()   # the boss's ring
+    screws = [j for j in lay.joints if j.name.startswith("fuse_")]
+    assert len(screws) == 2 and all(j.kind == "insert" and j.host == "case_lower" for j in screws)
+    for j, (hx, hy, hz) in zip(screws, holes):
+        assert j.head == pytest.approx((hx, hy, hz + p.fuse.tab_mm)) and j.grip_mm == p.fuse.tab_mm
+        assert asm.node(f"insert_fuse_{screws.index(j)}") is not None
+
+
+def test_a_fuse_holder_whose_tabs_take_another_screw_is_refused():
+    """The rig's own mounting for the holder (once measured) replaces the estimate; one that names a thread
+    the floor's inserts do not take is one line naming the key."""
+    from cad.layout import DesignError, layout
+    pattern = "[{face: bottom, thread: M2.5, positions_mm: [[-16, 0], [16, 0]], depth_mm: 2, source: estimate, confidence: estimate}]"
+    rig = load_rig(overrides=[f"parts.blade_fuse.mounting={pattern}"])
+    with pytest.raises(DesignError) as e:
+        layout(rig)
+    text = str(e.value)
+    assert text.startswith("parts.blade_fuse.mounting: ") and "M2.5" in text and len(text.splitlines()) == 1, text
 
 
 def cq_vec(p):
@@ -78,6 +122,37 @@ def test_a_part_over_the_locknut_fails(asm):
     r = checks.check_power_parts(asm, extra=[("test_block", block)])
     assert not r.ok
     assert any("locknut cannot be tightened" in p and "test_block" in p for p in r.details), r.details
+
+
+def test_the_floor_bosses_stand_clear_of_the_locknut_socket_in_the_tray_stl(asm, tmp_path):
+    """The tray's own bosses beside the gland (the fuse holder's ahead of it, the cut-off's behind it) once stood
+    1.65 and 0.18 mm inside the socket's path (the layout spaced them from the locknut, not from the socket round
+    it; the check left case_lower out). Independent of the check's B-rep: trimesh sections the tray's STL 1 mm
+    over the floor and no material lies within the socket's circle round the gland's axis."""
+    from cad.layout.power import SOCKET_WALL_MM
+    p = asm.layout.power
+    x, y, _ = p.gland_pose.t
+    floor = asm.layout.case.interior.lo[2]
+    sock = p.gland.nut_d_mm / 2 + SOCKET_WALL_MM
+    mesh = _stl_mesh(asm, "case_lower", tmp_path)
+    sec = mesh.section(plane_origin=(0, 0, floor + 1.0), plane_normal=(0, 0, 1))
+    pts = np.asarray(sec.vertices)[:, :2]
+    r = np.hypot(pts[:, 0] - x, pts[:, 1] - y)
+    # the bosses touch the socket's circle (the strip has no room for more: 1 mm more put the cut-off into the
+    # left fan mount); the STL's chords lie inside the round boss, so a vertex is at most on that circle
+    assert r.min() > sock - 0.01, f"tray material {r.min():.2f} mm from the gland's axis, inside the {sock:.2f} mm socket"
+    assert r.min() < sock + 0.05        # the nearest thing there is a boss, where the layout spaces it
+
+
+def test_a_boss_in_the_socket_path_fails_the_check(asm, monkeypatch):
+    """The check reads the tray too: with a socket 1.5 mm fatter a side than the one the layout spaced the
+    bosses for, the bosses (1 mm clear) are in its way and case_lower is named."""
+    from cad import passthrough
+    assert checks.check_power_parts(asm).ok
+    monkeypatch.setattr(passthrough, "SOCKET_WALL_MM", passthrough.SOCKET_WALL_MM + 1.5)
+    r = checks.check_power_parts(asm)
+    assert not r.ok
+    assert any("locknut cannot be tightened" in d and "case_lower" in d for d in r.details), r.details
 
 
 def test_a_part_behind_a_breakout_fails(asm):
