@@ -8,6 +8,11 @@ notes. Notes, titles and tools are jinja2 templates rendered with the rig (``syn
 :func:`load_guide` raises :class:`GuideError` (one line per problem, naming steps.yaml, the line and the
 entry) when a step names a node the assembly does not have, a node is added twice or by no step, a
 supply is unknown, or a BOM line is used by no step.
+
+The power chain's order is not written in the file either: notes say ``{{ chain.wire }}`` (the whole
+chain, battery to converter, in the wiring diagram's order, the parts a later step fits left open for
+it) and ``{{ chain.join }}`` (in the step that fits a part left open: what to connect it between);
+:func:`power_chain` reads the chain from docs/guide/wiring.py's power wires.
 """
 from __future__ import annotations
 
@@ -112,6 +117,84 @@ class Guide:
 
 DEFAULT_VIEW = (1.0, 0.75, 0.9)
 
+#: wiring-diagram blocks of the power chain whose part kind is not the block's id: the battery's + is the
+#: dock adapter's terminal (the battery itself slides in at the last step)
+CHAIN_KIND = {"battery": "battery_adapter"}
+#: how the guide's text names each block of the power chain
+CHAIN_NAME = {"battery": "battery + (the dock adapter's + terminal)", "gland": "cable gland", "fuse": "fuse",
+              "switch": "power switch", "cutoff": "under-voltage cut-off", "converter": "converter input"}
+
+
+@dataclass(frozen=True)
+class ChainPart:
+    block: str                 # the block of docs/guide/wiring.py
+    name: str                  # as the guide names it
+    nodes: tuple[str, ...]     # the assembly nodes of its part
+
+
+def power_chain(asm) -> list[ChainPart]:
+    """The power chain in the wiring diagram's order: its power wires followed from the battery to the
+    converter's input (the converter's output is the Orin's DC lead, another circuit)."""
+    from cad.electrical import power_counts
+    from docs.guide.wiring import wiring
+    rig = asm.rig
+    _, wires, _ = wiring(rig, power_counts(asm))
+    onward: dict[str, str] = {}
+    for w in wires:
+        if w.kind == "power":
+            onward.setdefault(w.a, w.b)
+    out: list[ChainPart] = []
+    block: str | None = "battery"
+    while block is not None and block not in [c.block for c in out]:
+        pid = part_of_kind(rig, CHAIN_KIND.get(block, block))
+        out.append(ChainPart(block, CHAIN_NAME.get(block, block),
+                             tuple(n.name for n in asm.nodes if n.part_id == pid)))
+        if rig.part(pid).kind.value == "converter":
+            break
+        block = onward.get(block)
+    return out
+
+
+class ChainText:
+    """The power chain as one step's notes say it: ``wire`` and ``join`` (module docstring)."""
+
+    def __init__(self, chain: list[ChainPart], fitted_in: Mapping[str, int], step: int):
+        self.chain, self.step = chain, step
+        #: the step (0-based) that fits each part of the chain (its first node)
+        self.at = [min((fitted_in[n] for n in c.nodes if n in fitted_in), default=-1) for c in chain]
+
+    def _neighbours(self, k: int) -> tuple[str, str]:
+        before = next((self.chain[j].name for j in range(k - 1, -1, -1) if self.at[j] <= self.step), "")
+        after = next((self.chain[j].name for j in range(k + 1, len(self.chain)) if self.at[j] <= self.step), "")
+        return before, after
+
+    @property
+    def wire(self) -> str:
+        out = []
+        for k, c in enumerate(self.chain):
+            if self.at[k] <= self.step:
+                out.append(c.name)
+                continue
+            before, after = self._neighbours(k)
+            leads = " and ".join(x for x in (f"a lead from the {before}" if before else "",
+                                             f"{'one' if before else 'a lead'} to the {after}" if after else "") if x)
+            out.append(f"[{c.name}: fitted in step {self.at[k] + 1}, leave {leads} free for it]")
+        return " -> ".join(out)
+
+    @property
+    def join(self) -> str:
+        left = [k for k, c in enumerate(self.chain) if self.at[k] == self.step
+                and any(self.at[j] < self.step for j in range(len(self.chain)))]
+        if not left:
+            raise jinja2.TemplateRuntimeError("chain.join: this step fits no part of the power chain after an "
+                                              "earlier step wired the rest")
+        texts = []
+        for k in left:
+            before, after = self._neighbours(k)
+            texts.append(f"connect the {self.chain[k].name} between the {before} and the {after}"
+                         if before and after else f"connect the {self.chain[k].name} to the {before or after}")
+        return "; ".join(texts)
+
 
 def note_context(rig) -> dict:
     d = rig.desc
@@ -150,6 +233,12 @@ def load_guide(asm, bom: Bom, path: Path | str | None = None) -> Guide:
 
     names = [n.name for n in asm.nodes]
     node_by_name = {n.name: n for n in asm.nodes}
+    fitted_in: dict[str, int] = {}      # node -> the (first) step that adds it, for the chain's text
+    for i, s in enumerate(spec.steps):
+        for pat in s.nodes:
+            for m in fnmatch.filter(names, pat):
+                fitted_in.setdefault(m, i)
+    chain = power_chain(asm)
     cables = bom.cables
     claimed: dict[str, str] = {}
     seen_ids: dict[str, int] = {}
@@ -159,6 +248,7 @@ def load_guide(asm, bom: Bom, path: Path | str | None = None) -> Guide:
     steps: list[Step] = []
     for i, s in enumerate(spec.steps):
         key = ("steps", i)
+        ctx["chain"] = ChainText(chain, fitted_in, i)
         if s.id in seen_ids:
             bad(key + ("id",), f"{s.id!r} is already the id of steps[{seen_ids[s.id]}]")
         seen_ids[s.id] = i

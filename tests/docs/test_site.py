@@ -215,3 +215,79 @@ def test_cable_pictures_of_the_wiring_steps(docs_default, browser):
         assert f["complete"] and f["w"] == 960, f
         for route, mm in f["cables"]:
             assert mm == bought[route.replace("_", "-")], route
+
+
+# ------------------------------------------------------------------------------- printing: supports per part
+SUPPORTS = """return {
+  summary: document.querySelector('#supports-summary').textContent,
+  rows: Array.from(document.querySelectorAll('#supports-table tbody tr')).map(r => ({
+    part: r.id.replace('supports-', ''), ok: r.dataset.ok === 'true', cells: Array.from(r.cells).map(c => c.innerText),
+    bridge: r.querySelector('.bridge') ? r.querySelector('.bridge').textContent : null,
+    places: Array.from(r.querySelectorAll('li.place')).map(li => li.textContent), shown: r.getBoundingClientRect().height > 0})),
+};"""
+
+
+@pytest.fixture(scope="module")
+def built_default():
+    """The default rig's assembly, BOM and guide, in process (the docs_default site is built from the same)."""
+    from bom.bom import build_bom
+    from bom.catalogue import load_catalogue
+    from cad.assembly import build
+    from docs.guide.steps import load_guide
+    from platform_tools.rig import load_rig
+    rig = load_rig()
+    asm = build(rig)
+    bom = build_bom(asm, load_catalogue(rig, None))
+    return asm, bom, load_guide(asm, bom)
+
+
+def test_printing_page_shows_the_printability_check_per_part(docs_default, built_default, browser):
+    """Each printed part's row, as the browser shows it, says what check "printable without supports"
+    (cad/checks.py check_printable) found: its verdict and longest bridge, and the orientation it was
+    measured in (cad PRINT_SETUPS)."""
+    from cad.assembly import PRINT_SETUPS
+    from cad.checks import check_printable
+    asm = built_default[0]
+    check = check_printable(asm)
+    bridges = dict(re.findall(r"^(\w+): ok; .* longest bridge ([\d.]+) mm$", "\n".join(check.details), re.M))
+    browser.get((docs_default / "printing.html").as_uri())
+    got = browser.execute_script(SUPPORTS)
+    rows = {r["part"]: r for r in got["rows"]}
+    assert set(rows) == set(check.data) and len(rows) >= 10
+    p = asm.rig.desc.printing.printer
+    for pid, r in rows.items():
+        assert r["shown"] and r["ok"] == (not check.data[pid]["failing"]), r
+        rpy = ", ".join(f"{int(a)}" for a in PRINT_SETUPS[pid].rpy_deg)
+        assert r["cells"][1].startswith(f"{rpy} deg: ") and PRINT_SETUPS[pid].why[:30] in r["cells"][1], r
+        if r["bridge"] is not None:
+            assert r["bridge"] == f"{bridges[pid]} mm" and f"limit {p.max_bridge_mm:g} mm" in r["cells"][2], r
+        assert r["cells"][2].startswith("no supports") and not r["places"], r
+    assert rows["case_lid"]["bridge"] == f"{bridges['case_lid']} mm" and float(bridges["case_lid"]) > 10
+    assert got["summary"].startswith(f"Supports: none for any of the {len(rows)} printed parts")
+
+
+def test_printing_page_names_where_supports_are_needed(docs_default, built_default, browser, tmp_path):
+    """Given a check result with a part that fails (the ZED shelf turned upside down: its shelf then
+    overhangs the bed), the page says "supports needed" for that part with the place the check measured."""
+    import numpy as np
+    from cad.checks import printed_meshes
+    from cad.printability import analyse
+    from docs.guide.site import page_context, render_page
+    asm, bom, guide = built_default
+    p = asm.rig.desc.printing.printer
+    meshes = printed_meshes(asm)
+    results = {pid: analyse(tri, p.max_overhang_deg, p.max_bridge_mm) for pid, tri in meshes.items()}
+    flipped = meshes["zed_mount"] * np.array([1.0, -1.0, -1.0])          # 180 deg about x: a proper rotation
+    flipped -= flipped.reshape(-1, 3).min(axis=0) - meshes["zed_mount"].reshape(-1, 3).min(axis=0)
+    results["zed_mount"] = bad = analyse(flipped, p.max_overhang_deg, p.max_bridge_mm)
+    assert bad.failing
+    (tmp_path / "printing.html").write_text(render_page("printing.html", page_context(asm, bom, guide, results)))
+    shutil.copy(docs_default / "style.css", tmp_path / "style.css")
+    browser.get((tmp_path / "printing.html").as_uri())
+    got = browser.execute_script(SUPPORTS)
+    rows = {r["part"]: r for r in got["rows"]}
+    zed = rows["zed_mount"]
+    assert not zed["ok"] and zed["cells"][2].startswith("supports needed"), zed
+    assert zed["places"] == [g.describe() for g in bad.failing] and "span" in zed["places"][0], zed
+    assert all(r["ok"] for pid, r in rows.items() if pid != "zed_mount")
+    assert got["summary"].startswith(f"Supports: supports needed for 1 of {len(rows)} parts (zed_mount)")
