@@ -13,10 +13,61 @@ import sys
 from pathlib import Path
 
 from platform_tools.rig.atomic import OutputDir, write_text
-from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, print_json,
-    rig_from_args)
+from platform_tools.rig.conventions import UserError, add_output_options, add_rig_options, print_json
+from platform_tools.rig.conventions import rig_from_args as _load_rig_from_args
 
 DEFAULT_OUT = Path(__file__).resolve().parents[1] / "build" / "cad"
+
+
+def rig_from_args(args):
+    """The rig from the command's options (``--rig``, ``--set``). A ``--set`` the rig loader refuses as
+    out of range (it knows a type and a sign) for a key whose real limit the layout sets
+    (``cad.layout.constraints.LAYOUT_LIMITS``) is re-phrased with that limit, as a value inside the
+    loader's range but outside the layout's is: one line, exit 2."""
+    from platform_tools.rig.loader import RigError
+    try:
+        return _load_rig_from_args(args)
+    except RigError as exc:
+        lines = with_layout_limits(args, exc.lines)
+        if lines == exc.lines:
+            raise
+        raise RigError(lines) from None
+
+
+def with_layout_limits(args, lines: list[str]) -> list[str]:
+    """``lines`` (the rig loader's problems) with each refused numeric ``--set`` of a key in
+    ``LAYOUT_LIMITS`` given the layout's range, read off the layout made from the rig without the
+    refused ``--set`` values; ``lines`` as they are when that rig or layout cannot be made."""
+    import yaml
+    from platform_tools.rig import load_rig
+    from cad.layout.constraints import LAYOUT_LIMITS
+    from cad.layout.constants import C
+    from cad.layout.rig_layout import build_layout
+    overrides = list(getattr(args, "overrides", None) or ())
+    refused = [o for o in overrides if any(line.startswith(f"--set {o}: ") for line in lines)]
+    limited = {}
+    for o in refused:
+        key, _, raw = o.partition("=")
+        key = key.strip()
+        try:
+            value = yaml.safe_load(raw)
+        except yaml.YAMLError:
+            continue
+        if key in LAYOUT_LIMITS and isinstance(value, (int, float)) and not isinstance(value, bool):
+            limited[o] = (key, value)
+    if not limited:
+        return lines
+    try:
+        lay = build_layout(load_rig(args.rig, [o for o in overrides if o not in refused]), C)
+    except Exception:   # noqa: BLE001 -- only a better message: the loader's own lines stand
+        return lines
+    out = list(lines)
+    for o, (key, value) in limited.items():
+        expected = LAYOUT_LIMITS[key](lay)
+        if expected is not None:
+            out = [f"--set {o}: {key}: got {value:g} mm; {expected}" if line.startswith(f"--set {o}: ") else line
+                   for line in out]
+    return out
 
 
 def assembly_from_args(args, rig=None):
@@ -38,21 +89,39 @@ def design_error(problems) -> UserError:
     return UserError("\n".join(str(p) for p in problems))
 
 
+def replace_refusal(out: Path) -> str | None:
+    """Why ``--out`` may not be replaced (one line naming the folder and what in it export did not
+    write), or None: ``--out`` never deletes what it did not write."""
+    from cad.export import EXPORT_MARKER, foreign_files
+    foreign = foreign_files(out)
+    if not foreign:
+        return None
+    names = [f.relative_to(out).as_posix() + ("/" if f.is_dir() and not f.is_symlink() else "") for f in foreign]
+    shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+    what = ("a previous export, but it also holds" if (Path(out) / EXPORT_MARKER).is_file() else
+            "not a previous export: it holds")
+    return (f"{out}: {what} {shown}, which export did not write; refusing to replace it (that would delete "
+            f"{'it' if len(names) == 1 else 'them'}); move {'it' if len(names) == 1 else 'them'} out or choose "
+            f"an empty or new --out folder")
+
+
 def cmd_export(args) -> int:
-    from cad.export import FORMATS, export, foreign_files
+    from cad.export import FORMATS, export
     fmt = args.format.upper()
     if fmt != "ALL" and fmt not in FORMATS:
         raise UserError(f"unknown export format {args.format!r}; expected one of {', '.join(FORMATS)} or all")
     formats = set(FORMATS) if fmt == "ALL" else {fmt}
     if args.tolerance <= 0 or args.angular_tolerance <= 0:
         raise UserError("--tolerance and --angular-tolerance must be > 0 (mm and radians)")
-    foreign = foreign_files(args.out)
-    if foreign:
-        raise UserError(f"{args.out}: not a previous export (it holds {foreign[0]}, which export did not write); "
-                        f"refusing to replace it; choose an empty or new --out folder")
+    refusal = replace_refusal(args.out)
+    if refusal:
+        raise UserError(refusal)
     asm = assembly_from_args(args)
     with OutputDir(args.out) as stage:
         files = export(asm, stage, formats, args.tolerance, args.angular_tolerance)
+        refusal = replace_refusal(args.out)     # something put there while the export ran: the stage goes
+        if refusal:
+            raise UserError(refusal)
         names = [str(args.out / f.relative_to(stage)) for f in files]
     if args.json:
         print_json({"out": str(args.out), "files": names, "cache": {"hits": asm.cache.hits, "misses": asm.cache.misses}})
@@ -115,9 +184,10 @@ def register(sub) -> None:
                        description="Export the assembly (one STEP with named, coloured parts; a GLB), every printed "
                                    "part as STEP and STL in its print orientation, and SVG/PNG views. The output "
                                    "folder is replaced whole, only when everything was written, and only if it is empty "
-                                   "or a previous export.",
+                                   "or holds nothing but a previous export (the files its manifest lists).",
                        epilog="Exit codes: 0 written; 2 bad input (a bad --set, an impossible design, an unknown "
-                              "format, an --out folder that is not a previous export or cannot be written).")
+                              "format, an --out folder holding anything a previous export did not write, or one that cannot be "
+                              "written).")
     e.add_argument("format", metavar="FORMAT", help="STEP, STL, GLB, SVG, PNG or all")
     e.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default: build/cad)")
     e.add_argument("--tolerance", type=float, default=0.1, help="mesh linear tolerance for STL/GLB/PNG (mm)")

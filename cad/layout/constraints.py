@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 from platform_tools.rig import Rig
 
@@ -172,6 +173,27 @@ def _format_ranges(ranges: list[tuple[float, float]]) -> str:
                                      for a, b in ranges)
 
 
+def min_clearance(lay: Layout) -> float:
+    """The least ``enclosure.handles.clearance_mm`` (mm) that leaves a post between a foot and the grip."""
+    return lay.handles.geometry.foot + MIN_POST_MM + lay.handles.pad_mm
+
+
+def _has_handles(lay: Layout) -> bool:
+    h = lay.rig.desc.enclosure.handles
+    return bool(h.top or h.sides)
+
+
+#: rig keys whose real range only the layout knows (the rig loader checks their type and sign only, e.g.
+#: "> 0"): key -> the layout's "expected ..." for it, or None when this layout sets it no limit. Neither
+#: depends on the key's own value, so a layout made without the refused value gives the real range.
+LAYOUT_LIMITS: dict[str, Callable[[Layout], str | None]] = {
+    "enclosure.handles.grip_length_mm":
+        lambda lay: _format_ranges(grip_length_ranges(lay)) if _has_handles(lay) else None,
+    "enclosure.handles.clearance_mm":
+        lambda lay: f"expected >= {min_clearance(lay):g} mm" if _has_handles(lay) else None,
+}
+
+
 def _handle_problems(lay: Layout):
     rig, case = lay.rig, lay.case
     h = rig.desc.enclosure.handles
@@ -190,7 +212,7 @@ def _handle_problems(lay: Layout):
         if g.post_height < g.foot + MIN_POST_MM:
             yield DesignProblem("enclosure.handles.clearance_mm",
                                 f"{h.clearance_mm:g} mm leaves no post between the foot and the grip; expected >= "
-                                f"{g.foot + MIN_POST_MM + lay.handles.pad_mm:g} mm")
+                                f"{min_clearance(lay):g} mm")
     pad_h = h.grip_diameter_mm + 2 * PAD_MARGIN_MM    # a side handle's pad, up the lid's wall
     if h.sides and pad_h > case.outer.hi[2] - case.split_z - 2 * lay.fits.wall:
         yield DesignProblem("enclosure.handles.grip_diameter_mm",

@@ -97,6 +97,45 @@ def test_an_impossible_design_is_bad_input_in_every_command(tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("value", ["-5", "0"])
+def test_a_value_the_loader_refuses_gets_the_layouts_limit_in_every_command(tmp_path, value):
+    """-5 and 0 are refused by the rig loader (a length is > 0); the message still gives the layout's real
+    range, as 160 does: one line, exit 2, in check, params and export, nothing written."""
+    report = tmp_path / "report.txt"
+    out = tmp_path / "out"
+    for args in (("check", "--report", str(report)), ("params",), ("export", "SVG", "--out", str(out))):
+        r = run(*args, "--set", f"enclosure.handles.grip_length_mm={value}")
+        assert r.returncode == 2, (args, r.stderr)
+        lines = r.stderr.strip().splitlines()
+        assert len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
+        assert f"enclosure.handles.grip_length_mm: got {value} mm" in lines[0], lines[0]
+        assert "expected 64.0 to 150.4 mm" in lines[0] and "> 0" not in lines[0], lines[0]
+    assert not report.exists() and not out.exists()
+
+
+@pytest.mark.slow
+def test_layout_limits_beside_the_loaders_other_problems():
+    """Each refused --set keeps its own line; a layout-limited key gets the layout's limit, the real one
+    (12.8 mm passes, 12.7 fails), others keep the loader's words; without handles no layout limit applies."""
+    from platform_tools.rig import load_rig
+    from cad.layout import design_problems
+    r = run("params", "--set", "enclosure.handles.clearance_mm=-1", "--set", "enclosure.wall_mm=abc",
+            "--set", "enclosure.handles.grip_length_mm=0")
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 3, r.stderr
+    assert any("enclosure.handles.clearance_mm: got -1 mm; expected >= 12.8 mm" in x for x in lines), r.stderr
+    assert any("enclosure.handles.grip_length_mm: got 0 mm; expected 64.0 to 150.4 mm" in x for x in lines), r.stderr
+    assert any("enclosure.wall_mm: got 'abc'" in x for x in lines), r.stderr
+    def problems(v):
+        return design_problems(load_rig(overrides=[f"enclosure.handles.clearance_mm={v}"]))
+    assert problems(12.8) == [] and [p.key for p in problems(12.7)] == ["enclosure.handles.clearance_mm"]
+    r = run("params", "--set", "enclosure.handles.top=false", "--set", "enclosure.handles.sides=false",
+            "--set", "enclosure.handles.grip_length_mm=-5")
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "> 0" in r.stderr, r.stderr
+
+
+@pytest.mark.slow
 def test_suggested_grip_limits_really_pass_and_fail():
     """The range the message suggests is the real one: its ends pass, 0.1 mm beyond them fails."""
     from platform_tools.rig import load_rig
@@ -117,13 +156,131 @@ def test_export_refuses_a_folder_it_did_not_write(tmp_path):
     r = run("export", "SVG", "--out", str(out))
     assert r.returncode == 2 and "not a previous export" in r.stderr and "notes.txt" in r.stderr
     assert (out / "notes.txt").read_text() == "someone's notes" and sorted(out.iterdir()) == [out / "notes.txt"]
-    # a previous export (it holds the marker) is replaced whole
-    fresh = tmp_path / "fresh"
-    assert run("export", "SVG", "--out", str(fresh)).returncode == 0
-    assert (fresh / ".rig-cad-export").is_file()
-    (fresh / "views" / "stale.svg").write_text("<svg/>")
-    assert run("export", "SVG", "--out", str(fresh)).returncode == 0
-    assert not (fresh / "views" / "stale.svg").exists() and (fresh / "views" / "iso.svg").is_file()
+
+
+@pytest.fixture(scope="module")
+def previous_export(tmp_path_factory):
+    """A real previous export through the CLI (SVG, the cheapest format): each test copies it."""
+    out = tmp_path_factory.mktemp("previous") / "export"
+    r = run("export", "SVG", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+def _copy(previous, tmp_path):
+    import shutil
+    out = tmp_path / "out"
+    shutil.copytree(previous, out)
+    return out
+
+
+def _state(folder):
+    """Everything a replacement would change: the folder itself, every entry, its bytes and times."""
+    return folder.stat().st_ino, {p.relative_to(folder).as_posix(): (p.read_bytes() if p.is_file() else None,
+                                                                     p.stat().st_mtime_ns)
+                                  for p in sorted(folder.rglob("*"))}
+
+
+def _refused(out, needle):
+    before = _state(out)
+    r = run("export", "SVG", "--out", str(out))
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
+    assert str(out) in lines[0] and needle in lines[0] and "did not write" in lines[0], lines[0]
+    assert _state(out) == before                        # not swapped, not one byte or time changed
+    assert list(out.parent.iterdir()) == [out]          # no staging folder left beside it
+
+
+@pytest.mark.slow
+def test_a_previous_export_holding_a_user_file_is_refused(previous_export, tmp_path):
+    """--out never deletes what it did not write: a user's file in a previous export stops the export."""
+    out = _copy(previous_export, tmp_path)
+    (out / "notes.txt").write_bytes(b"my measurements\n\x00\xff")
+    _refused(out, "notes.txt")
+    assert (out / "notes.txt").read_bytes() == b"my measurements\n\x00\xff"
+
+
+@pytest.mark.slow
+def test_a_previous_export_holding_a_user_folder_is_refused(previous_export, tmp_path):
+    out = _copy(previous_export, tmp_path)
+    (out / "scans").mkdir()
+    (out / "scans" / "a.ply").write_text("ply")
+    _refused(out, "scans/")
+    (out / "scans" / "a.ply").unlink()
+    _refused(out, "scans/")                              # an empty folder of the user's is the user's too
+    (out / "scans").rmdir()
+    (out / "views" / "mine").mkdir()                     # inside a folder the export writes
+    _refused(out, "views/mine/")
+
+
+@pytest.mark.slow
+def test_a_user_file_named_like_an_export_file_is_refused(previous_export, tmp_path):
+    """The previous export's manifest, not the export's file patterns, says what it wrote."""
+    out = _copy(previous_export, tmp_path)
+    (out / "views" / "my_sketch.svg").write_text("<svg/>")
+    _refused(out, "views/my_sketch.svg")
+
+
+@pytest.mark.slow
+def test_a_previous_export_alone_is_replaced(previous_export, tmp_path):
+    """What the previous export recorded (here also a view an earlier version wrote) is replaced whole;
+    the new marker lists exactly the files the new export wrote."""
+    import json
+    out = _copy(previous_export, tmp_path)
+    marker = out / ".rig-cad-export"
+    doc = json.loads(marker.read_text())
+    doc["files"].append("views/side.svg")
+    marker.write_text(json.dumps(doc))
+    (out / "views" / "side.svg").write_text("<svg/>")
+    inode = out.stat().st_ino
+    r = run("export", "SVG", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    assert out.stat().st_ino != inode and not (out / "views" / "side.svg").exists()
+    assert (out / "views" / "iso.svg").is_file()
+    files = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
+    assert sorted(json.loads(marker.read_text())["files"] + [".rig-cad-export"]) == files
+    assert list(out.parent.iterdir()) == [out]
+
+
+def test_an_older_export_without_a_manifest_falls_back_to_the_patterns(tmp_path):
+    """An export from before the manifest (its marker is one line of text): the export's file patterns
+    say what it may hold."""
+    from cad.export import foreign_files
+    out = tmp_path / "old"
+    (out / "views").mkdir(parents=True)
+    (out / "printed").mkdir()
+    (out / ".rig-cad-export").write_text("written by cad/build.py export; rig 431a\n")
+    for f in ("rig_assembly.step", "camera_frames.json", "views/iso.svg", "printed/handle.stl"):
+        (out / f).write_text("x")
+    assert foreign_files(out) == []
+    (out / "views" / "rig_assembly.glb").write_text("x")   # an export name, in the wrong folder
+    (out / "notes.txt").write_text("mine")
+    (out / "scans").mkdir()
+    assert foreign_files(out) == [out / "notes.txt", out / "scans", out / "views" / "rig_assembly.glb"]
+
+
+def test_a_file_added_while_exporting_stops_the_swap(tmp_path, monkeypatch):
+    """The folder is checked again just before it is swapped: a file put there meanwhile is kept."""
+    import argparse
+    import cad.cli
+    import cad.export
+    from platform_tools.rig.conventions import UserError
+    out = tmp_path / "out"
+    out.mkdir()
+
+    def fake_export(asm, stage, formats, tolerance, angular):
+        (stage / "views").mkdir()
+        (stage / "views" / "iso.svg").write_text("<svg/>")
+        (out / "notes.txt").write_text("written during the export")
+        return [stage / "views" / "iso.svg"]
+
+    monkeypatch.setattr(cad.export, "export", fake_export)
+    monkeypatch.setattr(cad.cli, "assembly_from_args", lambda args: None)
+    args = argparse.Namespace(format="SVG", out=out, tolerance=0.1, angular_tolerance=0.2, json=False, quiet=True)
+    with pytest.raises(UserError, match="notes.txt"):
+        cad.cli.cmd_export(args)
+    assert sorted(out.iterdir()) == [out / "notes.txt"] and list(tmp_path.iterdir()) == [out]
 
 
 @pytest.mark.slow
