@@ -138,7 +138,7 @@ def export_key(asm: Assembly, formats: set[str], tolerance: float, angular: floa
         h.update(f"{n.name}|{n.part_id}|{n.group}|{cache_mod.key(n.spec)}|{n.pose.matrix().tobytes().hex()}|{n.colour}|"
                  f"{sorted(n.props.items())}".encode())
     h.update(f"{sorted(formats)}|{tolerance!r}|{angular!r}|{asm.rig.hash}".encode())
-    for mod in ("cad.export", "cad.render", "cad.assembly", "cad.parts.common", "cad.drawings"):
+    for mod in ("cad.export", "cad.render", "cad.assembly", "cad.parts.common", "cad.drawings", "cad.drawing_holes"):
         h.update(cache_mod._module_source_hash(mod).encode())
     return h.hexdigest()[:32]
 

@@ -4,7 +4,6 @@ key (or design constant) to change, so an impossible value never reaches OpenCas
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Callable
 
 from platform_tools.rig import Rig
@@ -13,25 +12,12 @@ from cad.bought.base import part_of_kind
 
 from .case import lug_bounds
 from .constants import PAD_MARGIN_MM, C, Constants
+from .errors import DesignError, DesignProblem     # noqa: F401 - raised here; callers import them from here
 from .rig_layout import Layout, build_layout
 
 #: the least post a handle needs between its foot and its grip
 MIN_POST_MM = 2.0
 
-
-@dataclass(frozen=True)
-class DesignProblem:
-    key: str       # the rig key (or design constant) to change
-    message: str
-
-    def __str__(self) -> str:
-        return f"{self.key}: {self.message}"
-
-
-class DesignError(Exception):
-    def __init__(self, problems: list[DesignProblem]):
-        self.problems = problems
-        super().__init__("\n".join(str(p) for p in problems))
 
 
 def design_problems(rig: Rig, c: Constants = C) -> list[DesignProblem]:

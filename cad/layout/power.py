@@ -23,6 +23,7 @@ from cad.geom import Bounds, placed_bounds, pose_xyz
 from .cameras import Cameras
 from .case import Shell
 from .compute import Compute
+from .errors import DesignError, DesignProblem
 from .fits import Fits
 
 #: wall beside the floor bosses' inserts (the cut-off's and the fuse holder's), beyond the printer's
@@ -139,7 +140,6 @@ def _bosses(pose: Pose, points, diameter: float, height: float) -> tuple[Boss, .
 def _fuse_holder(rig: Rig, fits: Fits) -> FuseHolder:
     """The fuse holder, its tab screws the floor inserts' thread: refused (the rig key named) when its
     mounting names another thread or its tab holes cannot pass that screw."""
-    from .constraints import DesignError, DesignProblem    # constraints builds the layout: import when called
     fuse = FuseHolder.from_rig(rig, part_of_kind(rig, "fuse"))
     thread = fits.insert.thread
     key = f"parts.{fuse.part_id}.mounting"
