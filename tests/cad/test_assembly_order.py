@@ -1,5 +1,6 @@
 """The assembly-order check: every screw's driver reaches it at the guide's step that fits it."""
 import dataclasses
+import re
 
 import pytest
 
@@ -128,3 +129,105 @@ def test_the_fuse_holder_screws_are_driven_at_the_power_step(asm):
     for s in fuse:
         assert "case_lid" in late.data[s]["blocked_by"]
         assert any(p.startswith(f"{s} (step") and "'lid'" in p and "blocked by case_lid" in p for p in late.details)
+
+
+# ----------------------------------------------------------------------------- the same verdict from the STL
+# An independent path (tests/cad/mesh_paths.py): every node's exported STL; the guide's steps read from
+# steps.yaml by fnmatch; per screw, its thread's driver from cad/bought/fasteners.yaml (a bit, then a handle,
+# from the check's seat gap off the head's top face, that face the screw mesh's furthest vertex along the axis);
+# the installed parts' triangles cast against rays along the axis (the envelope's centre and two rings, the
+# outer 0.05 mm in from its rim; a ray crossing a part an odd number of times starts inside it) and their
+# vertices tested inside the envelope. No boolean backend is installed (manifold3d, blender), so no mesh
+# intersection volume: a hit is a ray or a vertex inside.
+
+@pytest.fixture(scope="module")
+def meshes(asm):
+    from tests.cad.mesh_paths import node_meshes
+    return node_meshes(asm)
+
+
+def _mesh_steps(asm, order="guide"):
+    """The guide's steps as (id, nodes, bench), read by the mesh path; ``old``: the battery dock (step 'power')
+    after the Orin (step 'compute'); ``fuse_late``: the fuse holder's screws driven at the lid step."""
+    from tests.cad.mesh_paths import guide_steps
+    steps = guide_steps(_names(asm))
+    ids = [s[0] for s in steps]
+    if order == "old":
+        p, c = ids.index("power"), ids.index("compute")
+        steps[p], steps[c] = steps[c], steps[p]
+    elif order == "fuse_late":
+        fuse = [n for _, nodes, _ in steps for n in nodes if n.startswith("screw_fuse_")]
+        steps = [(i, [n for n in nodes if n not in fuse] + (fuse if i == "lid" else []), b) for i, nodes, b in steps]
+    return steps
+
+
+@pytest.fixture(scope="module")
+def mesh_drivers(asm, meshes):
+    """The mesh path's driver paths per order (computed once a module)."""
+    from cad.assembly_order import SEAT_GAP_MM
+    from tests.cad.mesh_paths import driver_paths_on_meshes
+    done = {}
+
+    def of(order):
+        if order not in done:
+            done[order] = driver_paths_on_meshes(asm, meshes, _mesh_steps(asm, order), SEAT_GAP_MM)
+        return done[order]
+    return of
+
+
+def _check_steps(asm, order):
+    """The same orders, as the check's steps."""
+    return dict(guide=lambda: None, old=lambda: _old_order(asm), fuse_late=lambda: _moved(asm, "screw_fuse_*", "lid"))[order]()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("order", ["guide", "old", "fuse_late"])
+def test_the_stl_blocks_the_drivers_the_check_blocks(asm, mesh_drivers, order):
+    """On the guide's order (the check passes every screw), the old order (the dock screws under the Orin) and the
+    fuse screws left to the lid step (under its roof): per screw, the same step and the same parts in the way, each
+    met as far out from the head."""
+    r = checks.check_assembly_order(asm, steps=_check_steps(asm, order))
+    paths = mesh_drivers(order)
+    assert set(paths) == set(r.data) and len(paths) == 59
+    assert {s: p.step for s, p in paths.items()} == {s: d["step"] for s, d in r.data.items()}
+    assert {s: set(p.blocked_by) for s, p in paths.items()} == {s: set(d["blocked_by"]) for s, d in r.data.items()}
+    assert r.ok is (order == "guide") and any(p.blocked_by for p in paths.values()) is (order != "guide")
+    # and as far out: the check prints each part's first point in its envelope to 0.1 mm
+    for line in r.details:
+        m = re.match(r"(screw_\S+) \(step .*blocked by (\S+) .* ([\d.]+) mm out from the screw head", line)
+        if m:
+            assert paths[m[1]].along_mm[m[2]] == pytest.approx(float(m[3]), abs=0.1), line
+
+
+@pytest.mark.slow
+def test_the_stl_finds_the_old_order_blocked_under_the_orin(asm, mesh_drivers):
+    r = checks.check_assembly_order(asm, steps=_old_order(asm))
+    paths = mesh_drivers("old")
+    blocked = {s for s, p in paths.items() if p.blocked_by}
+    assert blocked == {s for s, d in r.data.items() if d["blocked_by"]} == {f"screw_battery_{k}" for k in range(4)}
+    for k in range(4):
+        p = paths[f"screw_battery_{k}"]
+        assert p.blocked_by[0] == "jetson_agx_orin" and set(p.blocked_by) == set(r.data[p.screw]["blocked_by"])
+        # the Orin's underside 2.0 mm out from the head (issue 16's measurement), on the mesh
+        assert p.nearest_mm == pytest.approx(ISSUE_ORIN_BOTTOM_Z - ISSUE_DOCK_HEAD_TOP_Z, abs=0.05)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("along, radius_of, delta, blocked", [
+    (20.0, "bit", +0.3, False), (20.0, "bit", -0.3, True), (100.0, "bit", +0.3, True),
+    (100.0, "handle", +0.3, False), (100.0, "handle", -0.3, True),
+])
+def test_the_mesh_envelope_is_the_bit_then_the_handle(asm, meshes, along, radius_of, delta, blocked):
+    """The mesh path's envelope where the check's is (test_the_envelope_is_the_bit_then_the_handle's cubes, as
+    trimesh boxes installed from the first step)."""
+    import trimesh
+    from cad.assembly_order import SEAT_GAP_MM
+    from tests.cad.mesh_paths import driver_paths_on_meshes
+    d = fastener_table().size("M3").driver
+    r_off = dict(bit=d.bit_diameter_mm / 2, handle=d.handle_diameter_mm / 2)[radius_of] + delta
+    x, y, z = _orin_screw_axis(asm)
+    cube = trimesh.creation.box(bounds=[(x + r_off, y - 0.5, z - along - 1), (x + r_off + 1, y + 0.5, z - along)])
+    steps = _mesh_steps(asm)
+    steps[0] = (steps[0][0], steps[0][1] + ["obstacle"], steps[0][2])
+    paths = driver_paths_on_meshes(asm, dict(meshes, obstacle=cube), steps, SEAT_GAP_MM, only={"screw_orin_0"})
+    assert ("obstacle" in paths["screw_orin_0"].blocked_by) is blocked

@@ -99,3 +99,61 @@ def test_a_rig_resting_on_a_camera_fails(asm):
     r = checks.check_stands(low)
     assert not r.ok and "zed_x" in r.data["resting_on"]
     assert any(d == "it rests on a camera: zed_x" for d in r.details)
+
+
+# ----------------------------------------------------------------------------- the same verdict from the STL
+# An independent path (tests/cad/mesh_paths.py): every node exported to STL as placed, the table at the lowest
+# vertex, the support polygon scipy's convex hull of the vertices near it, the centre of mass the rig's part masses
+# (config/rig.yaml mass_g; printed and machined parts their mesh volume times the rig's densities) at their meshes'
+# trimesh centroids. The centroid assumes each part's mass spread uniformly through its modelled solid -- the
+# check's B-rep centre of mass assumes the same of the same solids, so what differs between the paths is the
+# STL's chords (0.1 mm) against the check's own tessellation (0.05 mm) of the parts on the table.
+
+#: the paths' angles within this (deg): the hull's corners move by at most the two tessellations' chords
+#: (0.1 + 0.05 mm) in plan, the centre of mass by < 0.01 mm, 137 mm up: atan(0.15 / 137) = 0.06 deg
+SAME_BAND_DEG = 0.1
+#: the STL's chordal tolerance: a vertex within it of the table may be on the table
+STL_CONTACT_MM = 0.1
+
+
+@pytest.fixture(scope="module")
+def on_table(asm):
+    from tests.cad.mesh_paths import node_meshes, part_masses_g
+    meshes = node_meshes(asm)
+    return meshes, part_masses_g(asm, meshes)
+
+
+@pytest.mark.slow
+def test_the_stl_stands_as_the_check_says(asm, on_table):
+    from cad.ergonomics import TABLE_CONTACT_MM
+    from tests.cad.mesh_paths import standing
+    meshes, masses = on_table
+    r = checks.check_stands(asm)
+    # the same contact band as the check (its documented 0.5 mm, read as data)
+    s = standing(meshes, masses, TABLE_CONTACT_MM)
+    assert s.resting_on == sorted(r.data["resting_on"]) == ["makita_battery"]
+    assert s.table_z == pytest.approx(r.data["table_z_mm"], abs=0.05)
+    assert np.allclose(s.com, r.data["com_mm"], atol=0.05)
+    assert s.min_tilt_deg == pytest.approx(r.data["min_tilt_deg"], abs=SAME_BAND_DEG)
+    # only what is within the STL's chord of the table: the battery's flat bottom, not its rounded edges (the
+    # check's 0.5 mm band reaches 1.5 mm up each side's rounding, so its support polygon is 3 mm wider across y):
+    # the rig tips sooner sideways by the mesh, still past min_tilt_deg
+    strict = standing(meshes, masses, STL_CONTACT_MM)
+    assert strict.resting_on == ["makita_battery"]
+    assert r.data["min_tilt_deg"] - 1.0 < strict.min_tilt_deg < r.data["min_tilt_deg"]
+    assert strict.min_tilt_deg >= asm.rig.desc.enclosure.ergonomics.min_tilt_deg
+
+
+@pytest.mark.slow
+def test_the_stl_of_a_front_heavy_rig_tips_too(asm, on_table):
+    from cad.ergonomics import TABLE_CONTACT_MM
+    from tests.cad.mesh_paths import standing
+    meshes, masses = on_table
+    front = (asm.layout.case.outer.hi[0], 0.0, 0.0)
+    heavy = checks.check_stands(asm, extra_masses=[("weight", 1000.0, front)])
+    least = asm.rig.desc.enclosure.ergonomics.min_tilt_deg
+    for band in (TABLE_CONTACT_MM, STL_CONTACT_MM):
+        s = standing(meshes, masses, band, extra=[("weight", 1000.0, front)])
+        assert not heavy.ok and s.min_tilt_deg < least
+        # over the front edge (the battery's flat end face, no rounding there): both bands and the check agree
+        assert s.min_tilt_deg == pytest.approx(heavy.data["min_tilt_deg"], abs=SAME_BAND_DEG)
