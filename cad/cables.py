@@ -31,15 +31,14 @@ from cad.bought.cables import CableKind, PlugEnvelope, cable_table
 from cad.geom import TOUCH_MM3, Bounds, Vec3, bounds_of, common_volume_mm3, placed_bounds
 
 from .assembly import Assembly
+from .cable_leads import ORIN_HEADER_Y_MM, ORIN_HEADER_Z_MM, button_leads, power_leads
+from .cable_route import Route
 
 #: a turn under this (deg) is a straight run: no bend
 STRAIGHT_DEG = 0.5
 #: the capture card's connectors on its front face (+x), across it (y, from its centre): the GMSL2 socket
 #: the ZED X uses and the trigger connector (J17). Estimates: the card is an envelope in the rig.
 CARD_GMSL2_Y_MM, CARD_SYNC_Y_MM = 0.0, 15.0
-#: the Orin devkit's 40-pin header, on its front face (+x): across (y, from the centre, towards the fan's
-#: side) and up from the devkit's bottom (z). Estimate: measure a devkit.
-ORIN_HEADER_Y_MM, ORIN_HEADER_Z_MM = 45.0, 42.0
 #: the Wi-Fi card's antenna sockets, reached through the devkit's side (towards each antenna), this far up
 #: from its bottom and at the antenna's x. Estimate.
 ORIN_WIFI_Z_MM = 60.0
@@ -68,45 +67,6 @@ CONVERTER_OUT_SHARE = 0.5
 #: the USB leads climb from the breakout to their run at this slope (deg), steep enough for the right one to
 #: clear the converter's top before its front face (a shallower one needs more run than the fan plates leave)
 USB_RISE_DEG = 75.0
-#: The power chain's leads (``power_leads``). Where each part's terminals are is an estimate (no drawing of the
-#: fuse holder, the cut-off module or the TEP 150WI's terminals was read; the switch's tabs are on its body's
-#: inner end, their layout not read): measure the parts and move these.
-#: the fuse holder's leads leave its body's ends along its axis, this share of its height up (in: the gland's end)
-FUSE_TERMINAL_Z_SHARE = 0.6
-#: the switch's two .250 tabs on its body's inner end, this far above and below its centre (line above, load
-#: below). Were they side by side across the rocker (y), the load tab's lead would pass through the right Wi-Fi
-#: antenna's bulkhead, 4 mm in front of the switch's inner end
-SWITCH_TAB_DZ_MM = 4.0
-#: the cut-off module's screw terminals, top entry on its component block: BAT+ and BAT- at its gland end (-x),
-#: LOAD+ and LOAD- at the other, this far in from the block's centre along it (x) and BAT+ / LOAD+ this far
-#: outboard (y) of the centre, BAT- on the centre line, LOAD- ``POWER_PAIR_OFFSET_MM`` beyond LOAD+ in x and y
-CUTOFF_TERMINAL_DX_MM, CUTOFF_TERMINAL_DY_MM = 10.0, 5.0
-#: the converter's input terminals on its rear end (-x) beside the output, this share of the way across it from its
-#: outboard face (+IN; -IN ``POWER_PAIR_OFFSET_MM`` inboard of it), at its mid height
-CONVERTER_IN_SHARE = 0.25
-#: the LOAD+ and LOAD- leads run side by side this far apart (each plane of the pair this far from the other's)
-POWER_PAIR_OFFSET_MM = 5.0
-#: the two splice leads (fuse and cut-off) end this far above the battery lead's end: the lever splices between
-SPLICE_GAP_MM = 10.0
-#: a lead from the tray to a part in the lid (the power switch) is bought this much longer, so the lid can be
-#: lifted off and set down beside the tray with the lead still on its tab (estimate: about 100 mm up, then over)
-LID_OPENING_SLACK_MM = 150.0
-
-
-@dataclass(frozen=True)
-class Route:
-    """One cable: ``points`` (rig frame, mm) from the connector it leaves to the one it plugs into."""
-    name: str
-    kind: str                  # a kind of the cable table
-    catalogue: str | None      # the BOM entry it is bought as (None: part of a bought part's own lead)
-    ends: tuple[str, str]      # the nodes it plugs into
-    points: tuple[Vec3, ...]
-    radius_mm: float           # the radius every bend is laid with
-    plugs: tuple[bool, bool] = (True, True)   # a connector at each end (False: the part's own lead leaves it)
-    #: the bodies of right-angle plugs at its ends (name, box): checked clear of every part and cable
-    envelopes: tuple[tuple[str, Bounds], ...] = ()
-    #: bought this much longer than its route and the kind's slack (a lead into the lid: ``LID_OPENING_SLACK_MM``)
-    extra_slack_mm: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -261,98 +221,8 @@ def routes(asm: Assembly) -> list[Route]:
     out += usb_leads(asm)
     out.append(dc_lead(asm))
     out += power_leads(asm, out)
+    out += button_leads(asm)
     return out
-
-
-def power_leads(asm: Assembly, others: list[Route]) -> list[Route]:
-    """The power chain after the gland, one 18 AWG lead per link: from the splice over the battery lead's end
-    to the fuse holder's gland end (``fuse_in``); from its other end back into the rear bay, up over the rear
-    port band, across the bay, up beside the capture card and forward over the devkit, then round to the
-    switch's line tab from in front (``fuse_switch``, into the lid); from the switch's load tab forward, across
-    the case over the devkit under the capture card and down onto the cut-off's BAT+ (``switch_cutoff``, from
-    the lid); the battery minus from the splice to its BAT- (``battery_minus``); and LOAD+ and LOAD- side by side
-    up over the devkit ahead of the card, across, down over the converter, back along it and into its input
-    terminals on its rear end (``cutoff_converter_plus`` / ``_minus``). The two leads to the lid are bought
-    ``LID_OPENING_SLACK_MM`` longer. Every height and lane is taken from the parts they pass (rig frame, mm)."""
-    lay = asm.layout
-    k = cable_table().kinds["power_lead"]
-    R, r, clear = k.min_bend_radius_mm, k.diameter_mm / 2, lay.fits.clear
-    turn = k.plug_mm + 1.02 * R            # a terminal's straight, then a 90 deg bend's tangent, with 2 % spare
-    p, orin, card, inner = lay.power, lay.compute.orin_box, lay.compute.card_box, lay.case.interior
-    fuse = placed_bounds(p.fuse.body(), p.fuse_pose)
-    z_ft = fuse.lo[2] + FUSE_TERMINAL_Z_SHARE * (fuse.hi[2] - fuse.lo[2])
-    y_f = float(p.fuse_pose.t[1])
-    # the splice over the battery lead's end (cad/cables.py battery_lead: it ends R above the locknut)
-    bat = next(o for o in others if o.name == "battery_lead").points[-1]
-    xg, yg, z_s = bat[0], bat[1], bat[2] + SPLICE_GAP_MM
-    out = [Route("fuse_in", "power_lead", "power_wire", ("blade_fuse", "cable_gland"),
-                 ((fuse.hi[0], y_f, z_ft), (xg, y_f, z_ft), (xg, y_f, z_s)), R, plugs=(True, False))]
-    # the switch: its tabs on the body's inner end (+x), a tab's lead runs straight in front of it first
-    sw, sw_pose = lay.controls["power_switch"]
-    body = placed_bounds(sw.body_bounds(), sw_pose)
-    x_sw, y_sw, z_sw = body.hi[0], float(sw_pose.t[1]), float(sw_pose.t[2])
-    x_turn = x_sw + turn
-    line, load = (x_sw, y_sw, z_sw + SWITCH_TAB_DZ_MM), (x_sw, y_sw, z_sw - SWITCH_TAB_DZ_MM)
-    # the rear bay: between the rear wall and the devkit; crossed over the rear leads' highest run (the right
-    # USB lead over the converter) and under the switch's body
-    x_bay = inner.lo[0] + clear + r + 1.0
-    usb_top = max(pt[2] for o in others if o.kind == "usb_lead" for pt in o.points) + \
-        cable_table().kinds["usb_lead"].diameter_mm / 2
-    z_bay = ((usb_top + clear + r) + (body.lo[2] - clear - r)) / 2
-    y_run = (card.lo[1] + body.hi[1]) / 2 if y_sw < 0 else (card.hi[1] + body.lo[1]) / 2
-    out.append(Route("fuse_switch", "power_lead", "power_wire", ("blade_fuse", "power_switch"),
-                     ((fuse.lo[0], y_f, z_ft), (x_bay, y_f, z_ft), (x_bay, y_f, z_bay), (x_bay, y_run, z_bay),
-                      (x_bay, y_run, line[2]), (x_turn, y_run, line[2]), (x_turn, y_sw, line[2]), line), R,
-                     extra_slack_mm=LID_OPENING_SLACK_MM))
-    # the cut-off's terminals, on top of its component block
-    blk = placed_bounds(p.cutoff.components(), p.cutoff_pose)
-    cx, cy, zt = blk.centre[0], blk.centre[1], blk.hi[2]
-    side = 1.0 if cy > 0 else -1.0
-    bat_p = (cx - CUTOFF_TERMINAL_DX_MM, cy + side * CUTOFF_TERMINAL_DY_MM, zt)
-    bat_m = (cx - CUTOFF_TERMINAL_DX_MM, cy, zt)
-    load_p = (cx + CUTOFF_TERMINAL_DX_MM, cy + side * CUTOFF_TERMINAL_DY_MM, zt)
-    # across over the devkit under the capture card, at the load tab's height
-    out.append(Route("switch_cutoff", "power_lead", "power_wire", ("power_switch", "undervoltage_cutoff"),
-                     (load, (x_turn, y_sw, load[2]), (x_turn, bat_p[1], load[2]), (bat_p[0], bat_p[1], load[2]), bat_p),
-                     R, extra_slack_mm=LID_OPENING_SLACK_MM))
-    # the battery minus: up from the splice, along to the cut-off's BAT- and down onto it
-    z_m = bat_m[2] + turn + 1.02 * R
-    out.append(Route("battery_minus", "power_lead", "power_wire", ("cable_gland", "undervoltage_cutoff"),
-                     _distinct(((xg, yg, z_s), (xg, yg, z_m), (bat_m[0], yg, z_m), (bat_m[0], bat_m[1], z_m), bat_m)),
-                     R, plugs=(False, True)))
-    # LOAD+ and LOAD-: up ahead of the card over the devkit, across, down over the converter, back along its top
-    # to behind its rear end, down and into its input terminals
-    conv = p.converter_box
-    d = POWER_PAIR_OFFSET_MM
-    sgn = 1.0 if conv.centre[1] < 0 else -1.0          # inboard, from the converter's outboard face
-    y_in = (conv.lo[1] + CONVERTER_IN_SHARE * (conv.hi[1] - conv.lo[1])) if sgn > 0 else \
-        (conv.hi[1] - CONVERTER_IN_SHARE * (conv.hi[1] - conv.lo[1]))
-    z_over = orin.hi[2] + clear + r + 1.0
-    z_conv = conv.hi[2] + clear + r
-    z_in = conv.centre[2]
-    x_rear = conv.lo[0] - turn
-    plus = (load_p, (load_p[0], load_p[1], z_over), (load_p[0], y_in, z_over), (load_p[0], y_in, z_conv),
-            (x_rear, y_in, z_conv), (x_rear, y_in, z_in), (conv.lo[0], y_in, z_in))
-    # LOAD-: each plane of the pair d apart (the x = const part d ahead, the y = const part d inboard), so
-    # every bend of one lies in a plane d from the other's
-    lm = (load_p[0] + d, load_p[1] + side * d)
-    minus = ((lm[0], lm[1], zt), (lm[0], lm[1], z_over + d), (lm[0], y_in + sgn * d, z_over + d),
-             (lm[0], y_in + sgn * d, z_conv + d), (x_rear, y_in + sgn * d, z_conv + d), (x_rear, y_in + sgn * d, z_in),
-             (conv.lo[0], y_in + sgn * d, z_in))
-    out.append(Route("cutoff_converter_plus", "power_lead", "power_wire", ("undervoltage_cutoff", "dc_converter"),
-                     plus, R))
-    out.append(Route("cutoff_converter_minus", "power_lead", "power_wire", ("undervoltage_cutoff", "dc_converter"),
-                     minus, R))
-    return out
-
-
-def _distinct(points) -> tuple[Vec3, ...]:
-    """``points`` without a waypoint that repeats the one before it (a lane already at its target)."""
-    out = [tuple(float(v) for v in points[0])]
-    for pt in points[1:]:
-        if np.linalg.norm(np.subtract(pt, out[-1])) > 1e-6:
-            out.append(tuple(float(v) for v in pt))
-    return tuple(out)
 
 
 def plug_at_port(orin_box: Bounds, port: str) -> tuple[PlugEnvelope, Bounds, tuple[float, float, float], float]:

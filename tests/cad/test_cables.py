@@ -271,7 +271,8 @@ def test_the_power_chain_is_routed_clear_with_the_lids_slack(asm, results):
     diameter, clear of every part and cable (the rig's check passes with them). Each ends on its parts' faces
     as placed; the two leads to the switch cross the case's split and are bought the lid's opening slack
     longer than their route and the wire's service slack."""
-    from cad.cables import LID_OPENING_SLACK_MM, cable_lengths
+    from cad.cable_leads import LID_OPENING_SLACK_MM
+    from cad.cables import cable_lengths
     assert results["cables"].ok, results["cables"].details[:12]
     lay = asm.layout
     rs = {r.name: r for r in routes(asm)}
@@ -337,3 +338,96 @@ def test_the_power_wire_is_bought_from_the_routes(asm):
     assert ln.source == "cable routes" and ln.unit == "pcs" and ln.quantity == len(mine) == len(POWER_LEADS)
     longest = max(c["bought_mm"] for c in mine)
     assert f"{longest:g} mm" in ln.part_number
+
+
+# ----------------------------------------------------------------------------- the record button's leads
+BUTTON_LEADS = ("button_switch", "button_switch_ground", "button_led", "button_led_ground")
+
+
+@pytest.mark.slow
+def test_the_record_buttons_leads_are_routed_clear_from_its_lugs_to_the_header(asm, results):
+    """The record button's switch and LED leads (one Dupont jumper per header pin) are routes of the cable check:
+    from the button's inner end in the lid's side wall, across the case's split, to the 40-pin header on the Orin's
+    front face; every bend at the jumper's minimum radius on the wire OpenCascade holds, clear of every part and
+    cable (the rig's check passes with them). Their pins are the rig's (recording.button), each ground a ground pin
+    of the header, none the fans'; each is bought the lid's opening slack longer, at a stock length."""
+    from cad.cable_leads import HEADER_GND_PINS, LID_OPENING_SLACK_MM, button_pins
+    from cad.cables import cable_lengths
+    from cad.geom import placed_bounds
+    from docs.guide.wiring import HEADER_5V_PIN, HEADER_GND_PIN
+    assert results["cables"].ok, results["cables"].details[:12]
+    lay = asm.layout
+    rs = {r.name: r for r in routes(asm)}
+    assert set(BUTTON_LEADS) <= set(rs)
+    k = KINDS["jumper_wire"]
+    b = asm.rig.desc.recording.button
+    pins = {name: pin for name, _, pin in button_pins(asm.rig)}
+    assert b.pin_numbering == "BOARD" and pins["button_switch"] == b.gpio_pin and pins["button_led"] == b.led_pin
+    assert {pins["button_switch_ground"], pins["button_led_ground"]} <= set(HEADER_GND_PINS)
+    assert len(set(pins.values()) | {HEADER_5V_PIN, HEADER_GND_PIN}) == 6            # no pin taken twice
+    bt, pose = lay.controls["record_button"]
+    body = placed_bounds(bt.body_bounds(), pose)
+    orin, split = lay.compute.orin_box, lay.case.split_z
+    heads = set()
+    for name in BUTTON_LEADS:
+        r = rs[name]
+        assert r.kind == "jumper_wire" and r.catalogue == "jumper_wires" and r.ends == ("record_button", "jetson_agx_orin")
+        assert not path_of(r, k).problems, name
+        arcs = [e for e in centreline(r).Edges() if e.geomType() == "CIRCLE"]
+        assert len(arcs) == 3 and all(e.radius() >= k.min_bend_radius_mm - 1e-6 for e in arcs), name
+        (x0, y0, z0), (x1, y1, z1) = r.points[0], r.points[-1]
+        # on the button's inner end, inside its footprint; on the devkit's front face, plugged in from the front
+        assert y0 == pytest.approx(body.lo[1]) and body.lo[0] < x0 < body.hi[0] and body.lo[2] < z0 < body.hi[2]
+        assert x1 == pytest.approx(orin.hi[0]) and orin.lo[1] < y1 < orin.hi[1] and orin.lo[2] < z1 < orin.hi[2]
+        assert r.points[-2][0] > x1 and r.points[-2][1:] == r.points[-1][1:]
+        assert z0 > split > z1                     # from the lid to the tray
+        heads.add((round(y1, 3), round(z1, 3)))
+    assert len(heads) == 4                          # four pins, 2.54 mm apart at least
+    rows = {c["route"]: c for c in cable_lengths(asm)}
+    for name in BUTTON_LEADS:
+        c = rows[name]
+        assert c["slack_mm"] == k.service_slack_mm + LID_OPENING_SLACK_MM
+        assert c["bought_mm"] in k.stock_lengths_mm
+        assert c["bought_mm"] >= path_of(rs[name], k).length_mm + k.service_slack_mm + LID_OPENING_SLACK_MM
+
+
+@pytest.mark.slow
+def test_a_button_lead_through_the_devkit_or_bent_too_tight_fails(asm):
+    """The lowest button lead (the LED's ground) runs in from the button just ahead of the devkit's front face,
+    under its top: laid 10 mm further back, its run from the button passes through the devkit, and the check names
+    it. At half its radius, or with the U's forward leg one radius from the lane (too short for its two bends),
+    its bends fail."""
+    from cad.checks import check_cables
+    k = KINDS["jumper_wire"]
+    r = next(x for x in routes(asm) if x.name == "button_led_ground")
+    assert check_cables(asm, only=[r]).ok
+    p = list(r.points)
+    back = dataclasses.replace(r, name="test_back", points=tuple((x - 10.0 if i < 2 else x, y, z)
+                                                                   for i, (x, y, z) in enumerate(p)))
+    assert not path_of(back, k).problems           # a well-formed route: what fails it is the part in its way
+    res = check_cables(asm, only=[back])
+    assert not res.ok
+    assert any(d.startswith("cable test_back") and "jetson_agx_orin" in d for d in res.details), res.details[:4]
+    tight = path_of(dataclasses.replace(r, radius_mm=k.min_bend_radius_mm / 2), k)
+    assert any(f"needs at least {k.min_bend_radius_mm:g} mm" in s for s in tight.problems), tight.problems
+    xf = p[1][0] + k.min_bend_radius_mm
+    short = dataclasses.replace(r, points=(p[0], p[1], (xf, *p[2][1:]), (xf, *p[3][1:]), p[4]))
+    assert any("segment 2" in s and "too short" in s for s in path_of(short, k).problems)
+
+
+@pytest.mark.slow
+def test_the_jumper_wires_are_bought_from_the_routes_and_drawn_in_the_controls_step(asm):
+    """The BOM's jumper_wires line counts one piece per button lead route, at the stock length the longest needs
+    (no typed-in 8), and the guide's controls step lays those routes (its cable picture draws them)."""
+    from bom.bom import build_bom
+    from bom.catalogue import load_catalogue
+    from cad.cables import cable_lengths
+    from docs.guide.steps import load_guide
+    bom = build_bom(asm, load_catalogue(asm.rig, None))
+    ln = bom.line("jumper_wires")
+    mine = [c for c in cable_lengths(asm) if c["catalogue"] == "jumper_wires"]
+    assert ln.source == "cable routes" and ln.unit == "pcs" and ln.quantity == len(mine) == len(BUTTON_LEADS)
+    longest = max(c["bought_mm"] for c in mine)
+    assert f"{longest:g} mm" in ln.part_number
+    step = next(s for s in load_guide(asm, bom).steps if s.id == "controls")
+    assert {c["route"] for c in step.cables} >= set(BUTTON_LEADS)

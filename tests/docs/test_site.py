@@ -208,7 +208,8 @@ def test_cable_pictures_of_the_wiring_steps(docs_default, browser):
     figs = {f["step"]: f for f in browser.execute_script(CABLE_PICTURES)}
     assert {"step-cables", "step-controls"} <= set(figs)
     assert {r for r, _ in figs["step-cables"]["cables"]} >= {"gmsl2", "sync_left", "sync_right", "usb_left", "usb_right", "dc_lead"}
-    assert {r for r, _ in figs["step-controls"]["cables"]} == {"pigtail_left", "pigtail_right"}
+    assert {r for r, _ in figs["step-controls"]["cables"]} == {"pigtail_left", "pigtail_right", "button_switch",
+                                                              "button_switch_ground", "button_led", "button_led_ground"}
     html = (docs_default / "bom.html").read_text()
     bought = {m[0]: float(m[1]) for m in re.findall(r'id="cable-([a-z0-9-]+)" data-route-mm="[0-9.]+" data-bought-mm="([0-9.]+)"', html)}
     for f in figs.values():
