@@ -49,10 +49,12 @@ LID_OPENING_SLACK_MM = 150.0
 #: inboard (towards the devkit's centre line) from there. Estimate: measure a devkit and move these.
 HEADER_PITCH_MM = 2.54
 HEADER_FAN_COLUMN = 2
-#: the header's ground pins (the Jetson 40-pin header has the Raspberry Pi's layout: docs/guide/wiring.py), and the
-#: pins the fans' leads take (5 V, GND): each ground lead goes to the ground pin nearest its signal pin not taken
+#: the header's ground pins (the Jetson 40-pin header has the Raspberry Pi's layout, NVIDIA AGX Orin devkit
+#: pinout), and the pins the fans' leads take (5 V, GND; docs/guide/wiring.py draws them): each ground lead goes to
+#: the ground pin nearest its signal pin not taken
 HEADER_GND_PINS = (6, 9, 14, 20, 25, 30, 34, 39)
-HEADER_FAN_PINS = (2, 6)
+HEADER_5V_PIN, HEADER_GND_PIN = 2, 6
+HEADER_FAN_PINS = (HEADER_5V_PIN, HEADER_GND_PIN)
 #: a rig that numbers the button's pins BCM (recording.button.pin_numbering): the board pin of each BCM GPIO (the
 #: Raspberry Pi's table, which Jetson.GPIO's BCM mode follows)
 BCM_TO_BOARD = {2: 3, 3: 5, 4: 7, 17: 11, 27: 13, 22: 15, 10: 19, 9: 21, 11: 23, 0: 27, 5: 29, 6: 31, 13: 33, 19: 35,

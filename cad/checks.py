@@ -331,26 +331,33 @@ def printed_meshes(asm: Assembly, tolerance: float = 0.1, angular: float = 0.2) 
     return out
 
 
+def printability_of(asm: Assembly, meshes: dict[str, np.ndarray] | None = None) -> dict:
+    """Part id -> :class:`cad.printability.Printability` of every printed part's exported mesh in its print
+    orientation (``meshes``: :func:`printed_meshes` unless given), at the rig printer's limits."""
+    from .printability import analyse
+    p = asm.rig.desc.printing.printer
+    meshes = printed_meshes(asm) if meshes is None else meshes
+    return {pid: analyse(tri, p.max_overhang_deg, p.max_bridge_mm) for pid, tri in meshes.items()}
+
+
 def check_printable(asm: Assembly, meshes: dict[str, np.ndarray] | None = None) -> CheckResult:
     """No support needed: on every printed part's exported mesh, in its print orientation, every face
     overhanging more than ``max_overhang_deg`` is a bridge from supported edges of at most
     ``max_bridge_mm`` (cad/printability.py says how that is measured)."""
-    from .printability import analyse
     p = asm.rig.desc.printing.printer
-    meshes = printed_meshes(asm) if meshes is None else meshes
+    results = printability_of(asm, meshes)
     details, bad, data = [], 0, {}
-    for pid, tri in meshes.items():
-        r = analyse(tri, p.max_overhang_deg, p.max_bridge_mm)
+    for pid, r in results.items():
         data[pid] = dict(bed_contact_mm2=r.bed_contact_mm2, overhang_mm2=r.overhang_mm2,
                          failing=[g.describe() for g in r.failing])
-        worst = max((g.span_mm for g in r.regions if g.ok and g.area_mm2 >= 0.5), default=0.0)
         details.append(f"{pid}: {'ok' if r.ok else 'NEEDS SUPPORT'}; on the bed {r.bed_contact_mm2:.0f} mm^2, "
-                       f"{len(r.regions)} overhanging patches ({r.overhang_mm2:.0f} mm^2), longest bridge {worst:.1f} mm")
+                       f"{len(r.regions)} overhanging patches ({r.overhang_mm2:.0f} mm^2), longest bridge "
+                       f"{r.longest_bridge_mm:.1f} mm")
         for g in r.failing:
             bad += 1
             details.append(f"  {pid}: {g.describe()}")
     return CheckResult("printable without supports", bad == 0,
-                       f"{len(meshes)} printed parts, {bad} patches overhanging more than {p.max_overhang_deg:g} deg "
+                       f"{len(results)} printed parts, {bad} patches overhanging more than {p.max_overhang_deg:g} deg "
                        f"or bridging more than {p.max_bridge_mm:g} mm", details, data)
 
 

@@ -88,6 +88,11 @@ class Printability:
     def failing(self) -> list[Region]:
         return [r for r in self.regions if not r.ok]
 
+    @property
+    def longest_bridge_mm(self) -> float:
+        """The longest span of the patches that print (slivers under ``MIN_REGION_MM2`` aside)."""
+        return max((r.span_mm for r in self.regions if r.ok and r.area_mm2 >= MIN_REGION_MM2), default=0.0)
+
 
 def facet_geometry(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit normals (right-hand rule, as STL orders vertices) and areas of the facets."""

@@ -54,11 +54,10 @@ FUSE_TAB_FLAT_MM = 4.0
 
 
 @dataclass(frozen=True)
-class FuseHolder(BoughtPart):
+class FuseHolder(BoxPart):
     """The blade fuse holder: its body between two screw tabs that lie on the floor's bosses, each with a
     through hole. Frame: origin at the centre of the tabs' underside, x along the holder, z up. ``source``
     says where the tab holes come from (the rig's mounting, or the estimates above)."""
-    mount_uv_mm: tuple[tuple[float, float], ...] = ()
     tab_mm: float = FUSE_TAB_THICKNESS_MM
     hole_d_mm: float = FUSE_TAB_HOLE_D_MM
     tab_width_mm: float = FUSE_TAB_WIDTH_MM
@@ -77,16 +76,9 @@ class FuseHolder(BoughtPart):
         return cls(part_id, envelope(rig, part_id), part_colour("electronics"), mount_uv_mm=((-s, 0.0), (s, 0.0)),
                    source="estimate (cad/bought/electronics.py FUSE_TAB_*: no holder drawing read)")
 
-    def bounds(self) -> Bounds:
-        x, y, z = self.size
-        return Bounds((-x / 2, -y / 2, 0.0), (x / 2, y / 2, z))
-
-    def mount_points(self) -> list[tuple[float, float, float]]:
-        """The tab holes' centres on the tabs' underside (where the screws' inserts are, below)."""
-        return [(u, v, 0.0) for u, v in self.mount_uv_mm]
-
     def body(self) -> Bounds:
-        """The holder's body between the tabs' flats."""
+        """The holder's body between the tabs' flats (its tab holes' centres on the tabs' underside are
+        BoxPart's ``mount_points``, where the screws' inserts are, below)."""
         x, y, z = self.size
         half = min([x / 2] + [abs(u) - FUSE_TAB_FLAT_MM for u, _ in self.mount_uv_mm])
         return Bounds((-half, -y / 2, 0.0), (half, y / 2, z))

@@ -112,9 +112,8 @@ def place_power(rig: Rig, fits: Fits, shell: Shell, compute: Compute, cameras: C
              + [bx + _ahead(reach, by - strip_y) for bx, by, *_ in fuse_bosses])
     gland_pose = pose_xyz(gx, strip_y, shell.outer.lo[2])
     cutoff = BoardPart.from_rig(rig, part_of_kind(rig, "cutoff"))
-    cut_x = gx + gland.nut_d_mm / 2 + clear + cutoff.size[0] / 2
-    local = [np.asarray(pt, float) for pt in cutoff.mount_points()]          # in the board's frame, its centre at 0
-    cut_x = max([cut_x] + [gx + _ahead(reach, float(pt[1])) - float(pt[0]) for pt in local])
+    cut_x = max([gx + gland.nut_d_mm / 2 + clear + cutoff.size[0] / 2]     # mount points: the board's frame,
+                + [gx + _ahead(reach, v) - u for u, v, _ in cutoff.mount_points()])   # its centre at 0
     cutoff_pose = pose_xyz(cut_x, strip_y, floor_z + boss_h)
     bosses = _bosses(cutoff_pose, cutoff.mount_points(), boss_d, boss_h)
     breakout = SyncBreakout.from_rig(rig, part_of_kind(rig, "interface_board"))

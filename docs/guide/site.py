@@ -35,18 +35,12 @@ def supports(asm, results: Mapping | None = None) -> list[Supports]:
     """Per printed part: its orientation and the check's verdict. ``results`` (part id ->
     :class:`cad.printability.Printability`) replaces the check's own run (tests give a patched result)."""
     from cad.assembly import PRINT_SETUPS
-    from cad.printability import MIN_REGION_MM2, analyse
-    p = asm.rig.desc.printing.printer
     if results is None:
-        from cad.checks import printed_meshes
-        results = {pid: analyse(tri, p.max_overhang_deg, p.max_bridge_mm) for pid, tri in printed_meshes(asm).items()}
-    out = []
-    for pid, r in results.items():
-        setup = PRINT_SETUPS[pid]
-        longest = max((g.span_mm for g in r.regions if g.ok and g.area_mm2 >= MIN_REGION_MM2), default=0.0)
-        out.append(Supports(pid, tuple(setup.rpy_deg), setup.why, r.ok, len(r.regions), r.overhang_mm2, longest,
-                            tuple(g.describe() for g in r.failing)))
-    return out
+        from cad.checks import printability_of
+        results = printability_of(asm)
+    return [Supports(pid, tuple(PRINT_SETUPS[pid].rpy_deg), PRINT_SETUPS[pid].why, r.ok, len(r.regions),
+                     r.overhang_mm2, r.longest_bridge_mm, tuple(g.describe() for g in r.failing))
+            for pid, r in results.items()]
 
 
 def page_context(asm, bom: Bom, guide: Guide, printability: Mapping | None = None) -> dict:

@@ -11,10 +11,8 @@ from dataclasses import dataclass
 from html import escape
 
 from cad.bought.base import part_of_kind
+from cad.cable_leads import HEADER_5V_PIN, HEADER_GND_PIN   # the fans' pins of the Jetson 40-pin header
 from cad.electrical import budget, electrical_checks
-
-#: Jetson 40-pin header (NVIDIA AGX Orin devkit pinout, same layout as a Raspberry Pi header)
-HEADER_5V_PIN, HEADER_GND_PIN = 2, 6
 
 KINDS = {  # colour, label
     "power": ("#d62728", "power"),

@@ -329,15 +329,22 @@ def test_a_power_lead_under_the_devkits_top_fails(asm):
 def test_the_power_wire_is_bought_from_the_routes(asm):
     """The BOM's power_wire line counts one piece per power lead route, cut to the longest one's length
     (route + slack, and the lid's slack on the switch's leads): no typed-in 2 m."""
+    _bought_from_routes(asm, "power_wire", POWER_LEADS)
+
+
+def _bought_from_routes(asm, catalogue: str, leads):
+    """Assert the BOM's ``catalogue`` line counts one piece per route bought as it (as many as ``leads``), at
+    the length the longest needs; returns the BOM."""
     from bom.bom import build_bom
     from bom.catalogue import load_catalogue
     from cad.cables import cable_lengths
     bom = build_bom(asm, load_catalogue(asm.rig, None))
-    ln = bom.line("power_wire")
-    mine = [c for c in cable_lengths(asm) if c["catalogue"] == "power_wire"]
-    assert ln.source == "cable routes" and ln.unit == "pcs" and ln.quantity == len(mine) == len(POWER_LEADS)
+    ln = bom.line(catalogue)
+    mine = [c for c in cable_lengths(asm) if c["catalogue"] == catalogue]
+    assert ln.source == "cable routes" and ln.unit == "pcs" and ln.quantity == len(mine) == len(leads)
     longest = max(c["bought_mm"] for c in mine)
     assert f"{longest:g} mm" in ln.part_number
+    return bom
 
 
 # ----------------------------------------------------------------------------- the record button's leads
@@ -419,15 +426,7 @@ def test_a_button_lead_through_the_devkit_or_bent_too_tight_fails(asm):
 def test_the_jumper_wires_are_bought_from_the_routes_and_drawn_in_the_controls_step(asm):
     """The BOM's jumper_wires line counts one piece per button lead route, at the stock length the longest needs
     (no typed-in 8), and the guide's controls step lays those routes (its cable picture draws them)."""
-    from bom.bom import build_bom
-    from bom.catalogue import load_catalogue
-    from cad.cables import cable_lengths
     from docs.guide.steps import load_guide
-    bom = build_bom(asm, load_catalogue(asm.rig, None))
-    ln = bom.line("jumper_wires")
-    mine = [c for c in cable_lengths(asm) if c["catalogue"] == "jumper_wires"]
-    assert ln.source == "cable routes" and ln.unit == "pcs" and ln.quantity == len(mine) == len(BUTTON_LEADS)
-    longest = max(c["bought_mm"] for c in mine)
-    assert f"{longest:g} mm" in ln.part_number
+    bom = _bought_from_routes(asm, "jumper_wires", BUTTON_LEADS)
     step = next(s for s in load_guide(asm, bom).steps if s.id == "controls")
     assert {c["route"] for c in step.cables} >= set(BUTTON_LEADS)
