@@ -7,7 +7,15 @@ reader spent more time copying 1 MB images out of the chunks than zstd spent dec
 The order is mcap's own (``mcap.reader.SeekingReader.iter_messages``): by log time, ties by the chunk's offset in
 the file, then by the message's place in its chunk (``log_time_order=True``), or chunk by chunk in file order
 (``False``). A file without a chunk index (truncated, unindexed) is not for this module: :func:`has_chunk_index`
-says so, and the caller uses mcap's reader. Specification: https://mcap.dev/spec (Chunk, Message records).
+says so, and the caller uses mcap's reader. Specification: https://mcap.dev/spec (Chunk, Message, MessageIndex
+records).
+
+Where only a message's first bytes are wanted (``heads``: the export's index reads a ZED image's or depth map's
+header stamp, nothing else), a zstd chunk with a message index is decompressed only up to the last byte wanted of
+it, when that ends before PREFIX_FRACTION of its records: the message index (written after each chunk) says where
+each message starts. On this project's simulated full-size recording (20 s) the index then decompresses 981 of
+2,359 MB; its scan takes 7 % less CPU (the thermal frames, read whole for their tails and telemetry, are most of
+the decompression's time; the ZED chunks it skips compress well and decompress fast).
 """
 from __future__ import annotations
 
@@ -17,6 +25,7 @@ import struct
 #: record opcodes (MCAP specification)
 OP_MESSAGE = 0x05
 OP_CHUNK = 0x06
+OP_MESSAGE_INDEX = 0x07
 #: opcode (1 byte) + record length (uint64)
 RECORD_HEAD = 9
 #: a Message record's fixed fields: channel_id u16, sequence u32, log_time u64, publish_time u64
@@ -25,6 +34,8 @@ _U64 = struct.Struct("<Q")
 _U32 = struct.Struct("<I")
 #: a Chunk record's fixed fields: message_start_time, message_end_time, uncompressed_size u64; uncompressed_crc u32
 _CHUNK = struct.Struct("<QQQI")
+#: a MessageIndex record's fixed fields: channel_id u16, then the byte length u32 of its (log_time u64, offset u64) pairs
+_MESSAGE_INDEX = struct.Struct("<HI")
 
 
 class ScanError(ValueError):
@@ -47,8 +58,8 @@ def _decompress(compression: str, data, size: int) -> bytes:
     raise ScanError(f"chunk compression {compression!r} unknown (expected zstd, lz4 or none)")
 
 
-def read_chunk(fh, chunk_index) -> bytes:
-    """The decompressed records of the chunk ``chunk_index`` (an mcap ChunkIndex) of the open file ``fh``."""
+def _chunk_records(fh, chunk_index) -> tuple[str, memoryview, int]:
+    """(compression, the compressed records, their uncompressed size) of the chunk ``chunk_index`` of ``fh``."""
     fh.seek(chunk_index.chunk_start_offset)
     raw = fh.read(chunk_index.chunk_length)
     if len(raw) != chunk_index.chunk_length or raw[0] != OP_CHUNK:
@@ -66,8 +77,14 @@ def read_chunk(fh, chunk_index) -> bytes:
         raise ScanError(f"chunk at offset {chunk_index.chunk_start_offset}: bad header ({exc})") from None
     if pos + n > len(raw):
         raise ScanError(f"chunk at offset {chunk_index.chunk_start_offset}: records run past the chunk")
+    return compression, mv[pos:pos + n], size
+
+
+def read_chunk(fh, chunk_index) -> bytes:
+    """The decompressed records of the chunk ``chunk_index`` (an mcap ChunkIndex) of the open file ``fh``."""
+    compression, data, size = _chunk_records(fh, chunk_index)
     try:
-        out = _decompress(compression, mv[pos:pos + n], size)
+        out = _decompress(compression, data, size)
     except ScanError:
         raise
     except Exception as exc:        # zstandard.ZstdError, lz4's RuntimeError: a damaged chunk
@@ -101,18 +118,130 @@ def messages(records: bytes, channel_ids) -> list[tuple[int, int, int, int, int]
     return out
 
 
-def iter_messages(fh, summary, channel_ids, *, log_time_order: bool = True, chunks=None):
+def message_index(fh, chunk_index, channel_ids) -> list[tuple[int, int, int]] | None:
+    """``(offset, log_time, channel_id)`` of the messages of ``channel_ids`` in one chunk, by their offset in the
+    chunk's uncompressed records, read from the MessageIndex records written after the chunk (no decompression);
+    None when the chunk has no message index."""
+    ids = [cid for cid in channel_ids if cid in chunk_index.message_index_offsets]
+    if not ids or chunk_index.message_index_length <= 0:
+        return None
+    base = chunk_index.chunk_start_offset + chunk_index.chunk_length
+    fh.seek(base)
+    raw = fh.read(chunk_index.message_index_length)
+    where = f"the message index of the chunk at offset {chunk_index.chunk_start_offset}"
+    out = []
+    for cid in ids:
+        pos = chunk_index.message_index_offsets[cid] - base
+        try:
+            if pos < 0 or raw[pos] != OP_MESSAGE_INDEX:
+                raise ScanError(f"{where}: no MessageIndex record for channel {cid} at byte {pos + base}")
+            channel, n = _MESSAGE_INDEX.unpack_from(raw, pos + RECORD_HEAD)
+            entries = struct.unpack_from(f"<{n // 8}Q", raw, pos + RECORD_HEAD + _MESSAGE_INDEX.size)
+        except (struct.error, IndexError):
+            raise ScanError(f"{where}: channel {cid}'s record runs past the index") from None
+        if channel != cid or n % 16:
+            raise ScanError(f"{where}: channel {cid}'s record is damaged")
+        out += [(entries[k + 1], entries[k], cid) for k in range(0, len(entries), 2)]
+    out.sort()
+    return out
+
+
+#: a chunk is decompressed only in part when what is wanted of it ends before this fraction of its records
+PREFIX_FRACTION = 0.5
+
+
+class _Prefix:
+    """The first ``n`` bytes of a zstd chunk's records, decompressed only as far as they are asked for (:meth:`upto`)
+    into one buffer the messages are views of."""
+
+    def __init__(self, data, n: int, where: str):
+        import zstandard
+        self.buf = memoryview(bytearray(n))
+        self.size, self.got, self.where = n, 0, where
+        self._reader = zstandard.ZstdDecompressor().stream_reader(data)
+
+    def upto(self, n: int) -> None:
+        n = min(n, self.size)
+        try:
+            while self.got < n:
+                k = self._reader.readinto(self.buf[self.got:n])
+                if k == 0:
+                    raise ScanError(f"{self.where}: the records end at byte {self.got}, before their stated size")
+                self.got += k
+        except ScanError:
+            raise
+        except Exception as exc:                # zstandard.ZstdError: a damaged chunk
+            raise ScanError(f"{self.where}: {type(exc).__name__}: {exc}") from None
+
+
+def _prefix_messages(fh, chunk_index, wanted, heads, stats):
+    """``(log_time, offset, channel, data)`` of the chunk's wanted messages, by offset, its zstd records decompressed
+    only up to the last byte wanted: a channel in ``heads`` gives at most ``heads[channel]`` bytes of each message's
+    data. None where that would not save much (what is wanted ends past PREFIX_FRACTION of the records) or cannot
+    be done (no message index, another compression, no message in ``heads``)."""
+    if chunk_index.compression != "zstd" or not heads.keys() & set(chunk_index.message_index_offsets):
+        return None
+    every = message_index(fh, chunk_index, chunk_index.message_index_offsets)
+    if every is None:
+        return None
+    size = chunk_index.uncompressed_size
+    # where each wanted message ends at most: its head, or the next message's start (or the records' end)
+    bounds = [e[0] for e in every[1:]] + [size]
+    index = [(e, b) for e, b in zip(every, bounds) if e[2] in wanted]
+    need = max((min(b, off + RECORD_HEAD + _MESSAGE.size + heads[cid]) if cid in heads else b)
+               for (off, _, cid), b in index)
+    if need > PREFIX_FRACTION * size:
+        return None
+    _, data, _ = _chunk_records(fh, chunk_index)
+    where = f"chunk at offset {chunk_index.chunk_start_offset}"
+    prefix = _Prefix(data, need, where)
+    out = []
+    for (offset, _, cid), _ in index:
+        start = offset + RECORD_HEAD + _MESSAGE.size
+        prefix.upto(start)
+        if start > need or prefix.buf[offset] != OP_MESSAGE:
+            raise ScanError(f"{where}: no Message record at byte {offset}, where its message index says")
+        (length,) = _U64.unpack_from(prefix.buf, offset + 1)
+        channel, _, log_time, _ = _MESSAGE.unpack_from(prefix.buf, offset + RECORD_HEAD)
+        end = offset + RECORD_HEAD + length
+        if cid in heads:
+            end = min(end, start + heads[cid])
+        if channel != cid or end > need:
+            raise ScanError(f"{where}: the Message record at byte {offset} is not what its message index says")
+        prefix.upto(end)
+        out.append((log_time, offset, cid, prefix.buf[start:end]))
+    stats["decompressed_bytes"] = stats.get("decompressed_bytes", 0) + prefix.got
+    return out
+
+
+def _chunk_messages(fh, chunk_index, wanted, heads, stats):
+    """``(log_time, place, channel, data)`` of one chunk's wanted messages in record order (``place`` increases with
+    it), through :func:`_prefix_messages` where it applies, else by decompressing the whole chunk."""
+    if heads:
+        got = _prefix_messages(fh, chunk_index, wanted, heads, stats)
+        if got is not None:
+            return got
+    records = read_chunk(fh, chunk_index)
+    stats["decompressed_bytes"] = stats.get("decompressed_bytes", 0) + len(records)
+    view = memoryview(records)
+    return [(t, p, ch, view[a:b]) for t, p, ch, a, b in messages(records, wanted)]
+
+
+def iter_messages(fh, summary, channel_ids, *, log_time_order: bool = True, chunks=None, heads=None, stats=None):
     """``(channel_id, log_time, data)`` of every message of the wanted channels, ``data`` a memoryview (valid while
-    the caller holds it). ``chunks``: the chunk indexes to read (default: every one holding a wanted channel)."""
+    the caller holds it). ``chunks``: the chunk indexes to read (default: every one holding a wanted channel).
+    ``heads``: {channel_id: n} for channels of which only the first ``n`` bytes of each message's data are wanted (a
+    header stamp): a zstd chunk with a message index is then decompressed only up to the last byte wanted of it,
+    which skips most of a chunk of large images. ``stats``: a dict that gets ``decompressed_bytes``."""
     wanted = set(channel_ids)
+    heads = {cid: n for cid, n in (heads or {}).items() if cid in wanted}
+    stats = {} if stats is None else stats
     if chunks is None:
         chunks = [c for c in summary.chunk_indexes if wanted & set(c.message_index_offsets)]
     if not log_time_order:
         for c in sorted(chunks, key=lambda c: c.chunk_start_offset):
-            records = read_chunk(fh, c)
-            view = memoryview(records)
-            for log_time, _, channel, a, b in messages(records, wanted):
-                yield channel, log_time, view[a:b]
+            for log_time, _, channel, data in _chunk_messages(fh, c, wanted, heads, stats):
+                yield channel, log_time, data
         return
     # a chunk is opened when its first log time comes to the top, as in mcap's queue: (time, chunk offset, place)
     heap: list = [(c.message_start_time, c.chunk_start_offset, -1, 0, c) for c in chunks]
@@ -120,9 +249,7 @@ def iter_messages(fh, summary, channel_ids, *, log_time_order: bool = True, chun
     while heap:
         log_time, offset, place, channel, item = heapq.heappop(heap)
         if place < 0:
-            records = read_chunk(fh, item)
-            view = memoryview(records)
-            for t, p, ch, a, b in messages(records, wanted):
-                heapq.heappush(heap, (t, offset, p, ch, view[a:b]))
+            for t, p, ch, data in _chunk_messages(fh, item, wanted, heads, stats):
+                heapq.heappush(heap, (t, offset, p, ch, data))
             continue
         yield channel, log_time, item

@@ -221,6 +221,10 @@ def resolve_files(files: list[Path], recover: bool) -> tuple[list[Path], list[st
     return out, notes
 
 
+#: the bytes of a message's CDR data that :func:`header_stamp` reads: the encapsulation header, sec, nanosec
+STAMP_BYTES = 12
+
+
 def header_stamp(data: bytes) -> int:
     """Header stamp (ns) of a CDR-serialised ROS 2 message that starts with std_msgs/Header."""
     endian = "<" if data[1] == 1 else ">"
@@ -313,10 +317,11 @@ def _info(m, topic: str) -> dict:
             "k": [float(x) for x in m.k], "p": [float(x) for x in m.p]}
 
 
-def _messages(reader, fh, topics):
+def _messages(reader, fh, topics, stamp_only=()):
     """(schema, channel, log time, data) of the ``topics``' messages of one open MCAP file in log-time order: read
     straight from its chunks (:mod:`.mcapscan`: each decompressed once, data not copied) when it has a chunk index,
-    else through mcap's reader (a recovered or unindexed file)."""
+    else through mcap's reader (a recovered or unindexed file). Of the ``stamp_only`` topics the data may be cut
+    after its first STAMP_BYTES (mcapscan then decompresses a chunk of such messages only as far as it must)."""
     from . import mcapscan
     summary = reader.get_summary()
     if not mcapscan.has_chunk_index(summary):
@@ -324,7 +329,8 @@ def _messages(reader, fh, topics):
             yield schema, channel, msg.log_time, msg.data
         return
     ids = {cid for cid, c in summary.channels.items() if c.topic in set(topics)}
-    for cid, log_time, data in mcapscan.iter_messages(fh, summary, ids):
+    heads = {cid: STAMP_BYTES for cid in ids if summary.channels[cid].topic in set(stamp_only)}
+    for cid, log_time, data in mcapscan.iter_messages(fh, summary, ids, heads=heads):
         channel = summary.channels[cid]
         yield summary.schemas.get(channel.schema_id), channel, log_time, data
 
@@ -372,10 +378,12 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
     decoder = DecoderFactory()
     decoders: dict[int, object] = {}
     wanted = [t for t in list(by_topic) + list(status_topics) + list(info_topics) if t in channels]
+    #: the streams of which the index needs only the header stamp (a thermal frame's tail and telemetry are read too)
+    stamps_only = [t for t, s in by_topic.items() if not s.startswith("thermal")]
     for fi, f in enumerate(files):
         try:
             with open(f, "rb") as fh:
-                for schema, channel, log_time, data in _messages(mcap_reader(fh, f), fh, wanted):
+                for schema, channel, log_time, data in _messages(mcap_reader(fh, f), fh, wanted, stamps_only):
                     s = by_topic.get(channel.topic)
                     if s is not None:
                         frozen, counter = False, -1

@@ -178,3 +178,52 @@ def test_a_damaged_recording_is_one_line(bag, rig, tmp_path):
     with pytest.raises(RecordingError, match="damaged MCAP") as exc:
         open_recording(copy, rig)
     assert str(f) in str(exc.value) and "\n" not in str(exc.value)
+
+
+def _big_and_small_file(seed=1) -> bytes:
+    """Chunks of one large compressible message (a depth map's kind) followed by small ones: what the index needs only
+    the header of, and what it needs whole."""
+    rng = np.random.default_rng(seed)
+    buf = io.BytesIO()
+    w = Writer(buf, chunk_size=400_000, compression=CompressionType.ZSTD)
+    w.start()
+    sid = w.register_schema("s", "raw", b"")
+    big, small = w.register_channel("/big", "raw", sid), w.register_channel("/small", "raw", sid)
+    for n in range(40):
+        log = n * 1000
+        w.add_message(big, log_time=log, publish_time=log, sequence=n,
+                      data=rng.integers(0, 255, 16, dtype=np.uint8).tobytes() + bytes(500_000))
+        w.add_message(small, log_time=log + 1, publish_time=log + 1, sequence=n,
+                      data=rng.integers(0, 255, int(rng.integers(1, 300)), dtype=np.uint8).tobytes())
+    w.finish()
+    return buf.getvalue()
+
+
+@pytest.mark.parametrize("ordered", [True, False])
+def test_heads_cut_the_data_and_the_decompression_not_the_order(ordered):
+    data = _big_and_small_file()
+    summary = make_reader(io.BytesIO(data)).get_summary()
+    ids = {cid: c.topic for cid, c in summary.channels.items()}
+    big = next(cid for cid, t in ids.items() if t == "/big")
+    want = [(ids[c.id], m.log_time, m.data[:12] if c.id == big else m.data) for _, c, m in
+            make_reader(io.BytesIO(data)).iter_messages(log_time_order=ordered)]
+    full, cut = {}, {}
+    assert [(ids[c], t, bytes(d)[:12] if c == big else bytes(d)) for c, t, d in
+            mcapscan.iter_messages(io.BytesIO(data), summary, set(ids), log_time_order=ordered, stats=full)] == want
+    got = [(ids[c], t, bytes(d)) for c, t, d in
+           mcapscan.iter_messages(io.BytesIO(data), summary, set(ids), log_time_order=ordered, heads={big: 12},
+                                  stats=cut)]
+    assert got == want and len(got) == 80
+    assert cut["decompressed_bytes"] < full["decompressed_bytes"] / 10
+
+
+def test_a_message_index_that_points_elsewhere_is_one_line():
+    data = bytearray(_big_and_small_file())
+    summary = make_reader(io.BytesIO(bytes(data))).get_summary()
+    ids = {cid: c.topic for cid, c in summary.channels.items()}
+    big = next(cid for cid, t in ids.items() if t == "/big")
+    c = summary.chunk_indexes[1]
+    pos = c.message_index_offsets[big] + 9 + 6 + 8      # the offset of its first (log_time, offset) pair
+    data[pos:pos + 8] = (7).to_bytes(8, "little")
+    with pytest.raises(mcapscan.ScanError, match=f"chunk at offset {c.chunk_start_offset}"):
+        list(mcapscan.iter_messages(io.BytesIO(bytes(data)), summary, set(ids), heads={big: 12}))
