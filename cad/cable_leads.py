@@ -10,7 +10,7 @@ from cad.bought.cables import cable_table
 from cad.geom import Bounds, Vec3, placed_bounds
 
 from .assembly import Assembly
-from .cable_route import Route, _distinct
+from .cable_route import BEND_SPARE, Route, _distinct
 
 #: the Orin devkit's 40-pin header, on its front face (+x): across (y, from the centre, towards the fan's
 #: side) and up from the devkit's bottom (z); the fans' leads (cad/cables.py) plug in there too. Estimate:
@@ -135,8 +135,8 @@ def button_leads(asm: Assembly) -> list[Route]:
     # the forward legs: far enough ahead of the lugs for two bends (the side wall's) or for the housing and one bend
     # (the rear wall's), and of the header for the housing and a bend; then stepped forward pin by pin, from the
     # outermost column's (its upper row first) to the innermost column's lower row, furthest forward
-    x0 = max(max(t[0] for t in lugs) + (2 * 1.02 * R if along_y else k.plug_mm + 1.02 * R),
-             orin.hi[0] + k.plug_mm + 1.02 * R)
+    x0 = max(max(t[0] for t in lugs) + (2 * BEND_SPARE * R if along_y else k.plug_mm + BEND_SPARE * R),
+             orin.hi[0] + k.plug_mm + BEND_SPARE * R)
     rank = sorted(range(len(heads)), key=lambda i: (side * heads[i][1], heads[i][2]))
     out = []
     for i, ((name, _, _), t, h) in enumerate(zip(pins, lugs, heads)):
@@ -164,7 +164,7 @@ def power_leads(asm: Assembly, others: list[Route]) -> list[Route]:
     lay = asm.layout
     k = cable_table().kinds["power_lead"]
     R, r, clear = k.min_bend_radius_mm, k.diameter_mm / 2, lay.fits.clear
-    turn = k.plug_mm + 1.02 * R            # a terminal's straight, then a 90 deg bend's tangent, with 2 % spare
+    turn = k.plug_mm + BEND_SPARE * R      # a terminal's straight, then a 90 deg bend's tangent
     p, orin, card, inner = lay.power, lay.compute.orin_box, lay.compute.card_box, lay.case.interior
     fuse = placed_bounds(p.fuse.body(), p.fuse_pose)
     z_ft = fuse.lo[2] + FUSE_TERMINAL_Z_SHARE * (fuse.hi[2] - fuse.lo[2])
@@ -203,7 +203,7 @@ def power_leads(asm: Assembly, others: list[Route]) -> list[Route]:
                      (load, (x_turn, y_sw, load[2]), (x_turn, bat_p[1], load[2]), (bat_p[0], bat_p[1], load[2]), bat_p),
                      R, extra_slack_mm=LID_OPENING_SLACK_MM))
     # the battery minus: up from the splice, along to the cut-off's BAT- and down onto it
-    z_m = bat_m[2] + turn + 1.02 * R
+    z_m = bat_m[2] + turn + BEND_SPARE * R
     out.append(Route("battery_minus", "power_lead", "power_wire", ("cable_gland", "undervoltage_cutoff"),
                      _distinct(((xg, yg, z_s), (xg, yg, z_m), (bat_m[0], yg, z_m), (bat_m[0], bat_m[1], z_m), bat_m)),
                      R, plugs=(False, True)))

@@ -8,6 +8,9 @@ import numpy as np
 
 from cad.geom import Bounds, Vec3
 
+#: a straight that must hold a bend's tangent (or two) is made this much longer than they are: 2 % to spare
+BEND_SPARE = 1.02
+
 
 @dataclass(frozen=True)
 class Route:

@@ -32,7 +32,7 @@ from cad.geom import TOUCH_MM3, Bounds, Vec3, bounds_of, common_volume_mm3, plac
 
 from .assembly import Assembly
 from .cable_leads import ORIN_HEADER_Y_MM, ORIN_HEADER_Z_MM, button_leads, power_leads
-from .cable_route import Route
+from .cable_route import BEND_SPARE, Route
 
 #: a turn under this (deg) is a straight run: no bend
 STRAIGHT_DEG = 0.5
@@ -241,7 +241,7 @@ def _slope(dz: float, R: float, slope_deg: float) -> float:
     shallower when the climb is too short for both bends at that slope (the segment between the corners
     must hold both tangents, with 2 % to spare)."""
     theta = math.radians(slope_deg)
-    while theta > math.radians(STRAIGHT_DEG) and abs(dz) / math.sin(theta) < 2 * R * math.tan(theta / 2) * 1.02:
+    while theta > math.radians(STRAIGHT_DEG) and abs(dz) / math.sin(theta) < 2 * R * math.tan(theta / 2) * BEND_SPARE:
         theta -= math.radians(1.0)
     return theta
 
@@ -314,12 +314,12 @@ def _bay_descent(xc: float, z_run: float, exit_pt: Vec3, side: float, R: float, 
     dz = z_run - zp
     theta = math.radians(slope_deg)
     while theta > math.radians(STRAIGHT_DEG):
-        if dz / math.sin(theta) >= 1.02 * (R + R * math.tan(theta / 2)):
+        if dz / math.sin(theta) >= BEND_SPARE * (R + R * math.tan(theta / 2)):
             break
         theta -= math.radians(1.0)
     else:
         return None
-    yp = ye + side * 1.02 * R * math.tan(theta / 2)     # the last bend's tangent fits before the plug's side
+    yp = ye + side * BEND_SPARE * R * math.tan(theta / 2)     # the last bend's tangent fits before the plug's side
     yq = yp + side * dz / math.tan(theta)
     if abs(yq) > y_max:
         return None

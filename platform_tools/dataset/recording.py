@@ -317,10 +317,10 @@ def _info(m, topic: str) -> dict:
             "k": [float(x) for x in m.k], "p": [float(x) for x in m.p]}
 
 
-def _messages(reader, fh, topics, stamp_only=()):
+def _messages(reader, fh, topics, stamps_only=()):
     """(schema, channel, log time, data) of the ``topics``' messages of one open MCAP file in log-time order: read
     straight from its chunks (:mod:`.mcapscan`: each decompressed once, data not copied) when it has a chunk index,
-    else through mcap's reader (a recovered or unindexed file). Of the ``stamp_only`` topics the data may be cut
+    else through mcap's reader (a recovered or unindexed file). Of the ``stamps_only`` topics the data may be cut
     after its first STAMP_BYTES (mcapscan then decompresses a chunk of such messages only as far as it must)."""
     from . import mcapscan
     summary = reader.get_summary()
@@ -329,7 +329,8 @@ def _messages(reader, fh, topics, stamp_only=()):
             yield schema, channel, msg.log_time, msg.data
         return
     ids = {cid for cid, c in summary.channels.items() if c.topic in set(topics)}
-    heads = {cid: STAMP_BYTES for cid in ids if summary.channels[cid].topic in set(stamp_only)}
+    stamps_only = set(stamps_only)
+    heads = {cid: STAMP_BYTES for cid in ids if summary.channels[cid].topic in stamps_only}
     for cid, log_time, data in mcapscan.iter_messages(fh, summary, ids, heads=heads):
         channel = summary.channels[cid]
         yield summary.schemas.get(channel.schema_id), channel, log_time, data
