@@ -35,6 +35,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--calibration", metavar="DIR", type=Path,
                    help="report this folder of .cameramodel files as the calibration (default: the recording's "
                         "camera_info, else the rig's nominal models); the export uses the same rule")
+    p.add_argument("--workers", type=int, default=1, metavar="N",
+                   help="processes that read the recording's chunks side by side (default 1: this process alone); "
+                        "the index takes about half the time with 2 on 2 cores")
     add_rig_options(p)
     add_output_options(p)
     p.set_defaults(handler=cmd_sync_check)
@@ -84,13 +87,17 @@ def cmd_sync_check(args: argparse.Namespace) -> int:
     from ..dataset.layout import LayoutError, load_topic_map
     from ..dataset.recording import RecordingError, open_recording
     from ..dataset.sync import Limits, analyse
+    from ..dataset.engines import EngineError, started
     rig = rig_from_args(args)
+    if args.workers < 1:
+        raise UserError(f"--workers {args.workers}: expected 1 or more")
     try:
         topic_map = load_topic_map(args.topics) if args.topics else None
-        rec = open_recording(args.recording, rig, recover=args.recover, topic_map=topic_map)
+        with started("pool", args.workers) as pool:
+            rec = open_recording(args.recording, rig, recover=args.recover, topic_map=topic_map, pool=pool)
         report = analyse(rec, rig, Limits.from_rig(rig))
         cal = for_recording(rig, rec, args.calibration)
-    except (RecordingError, LayoutError, CalibrationError) as exc:
+    except (RecordingError, LayoutError, CalibrationError, EngineError) as exc:
         raise UserError(str(exc)) from None
     report["layout"] = rec.layout
     report["calibration"] = cal.to_dict()

@@ -67,9 +67,9 @@ def start_method() -> str:
 
 class Pool:
     """A process pool of workers that end with this process (workers.die_with_parent), started at once and warm:
-    ``warm_up`` (imports, numba's kernels loaded; no OpenCV call) runs in each spawned worker as it starts, while
-    this process indexes the recordings, or (``method`` "fork", :func:`start_method`) once here, the workers forked
-    after it. :meth:`run` runs tasks; :meth:`close` ends the workers."""
+    ``warm_up`` (imports, numba's kernels loaded; no OpenCV call) runs in each spawned worker as it starts, or
+    (``method`` "fork", :func:`start_method`) once here, the workers forked after it. :meth:`map` runs calls (the
+    index's chunk scans), :meth:`run` tasks; :meth:`close` ends the workers."""
 
     def __init__(self, workers: int, warm_up=None, method: str | None = None):
         import multiprocessing
@@ -77,6 +77,7 @@ class Pool:
         from concurrent.futures import ProcessPoolExecutor
         method = method or start_method()
         self.method = method                #: "spawn" or "fork", as the workers were started
+        self.workers = workers              #: how many workers run
         ctx = multiprocessing.get_context(method)
         self._before = set(multiprocessing.active_children())
         forked = method == "fork"
@@ -104,6 +105,22 @@ class Pool:
                     t = pending.pop(f)
                     finished(t, f.result())
                     next(bar, None)
+        except BaseException:
+            self.close(abort=True)
+            raise
+
+    def map(self, fn, args: list[tuple]) -> list:
+        """``fn(*a)`` for each ``a`` of ``args`` in the workers, the results in that order (the index's chunk scans,
+        :mod:`.indexscan`). An error of ``fn`` cancels what is queued and goes on here; an interrupt stops every worker
+        (as :meth:`run`)."""
+        futures = []
+        try:
+            futures = [self._pool.submit(fn, *a) for a in args]
+            return [f.result() for f in futures]
+        except Exception:
+            for f in futures:
+                f.cancel()
+            raise
         except BaseException:
             self.close(abort=True)
             raise

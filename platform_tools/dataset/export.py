@@ -203,8 +203,8 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
            on_chunk: Callable[[str], None] | None = None, topic_map=None, command: list[str] | None = None) -> dict:
     """``calibration``: a folder of models overriding the recordings' camera_info and the nominal models;
     ``topic_map``: a :class:`.layout.Layout` (``--topics``) instead of the detected layout; ``command``: the
-    command line, for the dataset card. A pool's workers start (and load their kernels) while the recordings
-    are indexed (engines.started)."""
+    command line, for the dataset card. A pool's workers start (and load their kernels) first, then scan the
+    recordings' chunks for the index (recording.open_recording ``pool``) and run the chunks (engines.started)."""
     if engine == "pool" and workers > 1:
         try:
             start_method()
@@ -234,7 +234,7 @@ def _export(recordings, out, rig, params, *, calibration, engine, workers, sched
     names = set()
     for path in recordings:
         try:
-            rec = open_recording(path, rig, recover=recover, topic_map=topic_map)
+            rec = open_recording(path, rig, recover=recover, topic_map=topic_map, pool=pool)
             recorded_depth = params.depth == "recorded" or (params.depth == "auto" and rec.has("zed_depth"))
             depth = "recorded" if recorded_depth else "stereo" if params.depth in BUILT_IN else params.depth
             pl = plan(rec, rig, rate_hz=params.rate_hz, tolerance_ms=params.tolerance_ms,

@@ -233,6 +233,16 @@ def iter_messages(fh, summary, channel_ids, *, log_time_order: bool = True, chun
     ``heads``: {channel_id: n} for channels of which only the first ``n`` bytes of each message's data are wanted (a
     header stamp): a zstd chunk with a message index is then decompressed only up to the last byte wanted of it,
     which skips most of a chunk of large images. ``stats``: a dict that gets ``decompressed_bytes``."""
+    for log_time, _, _, channel, data in iter_keyed(fh, summary, channel_ids, log_time_order=log_time_order,
+                                                    chunks=chunks, heads=heads, stats=stats):
+        yield channel, log_time, data
+
+
+def iter_keyed(fh, summary, channel_ids, *, log_time_order: bool = True, chunks=None, heads=None, stats=None):
+    """As :func:`iter_messages`, each message as ``(log_time, chunk offset, place, channel_id, data)``: the first three
+    are its place in mcap's order (log time, ties by the chunk's offset in the file, then by the record's place in its
+    chunk), so that messages read from different runs of chunks merge back into that order (``heapq.merge``).
+    ``summary`` is only read when ``chunks`` is None."""
     wanted = set(channel_ids)
     heads = {cid: n for cid, n in (heads or {}).items() if cid in wanted}
     stats = {} if stats is None else stats
@@ -240,8 +250,8 @@ def iter_messages(fh, summary, channel_ids, *, log_time_order: bool = True, chun
         chunks = [c for c in summary.chunk_indexes if wanted & set(c.message_index_offsets)]
     if not log_time_order:
         for c in sorted(chunks, key=lambda c: c.chunk_start_offset):
-            for log_time, _, channel, data in _chunk_messages(fh, c, wanted, heads, stats):
-                yield channel, log_time, data
+            for log_time, place, channel, data in _chunk_messages(fh, c, wanted, heads, stats):
+                yield log_time, c.chunk_start_offset, place, channel, data
         return
     # a chunk is opened when its first log time comes to the top, as in mcap's queue: (time, chunk offset, place)
     heap: list = [(c.message_start_time, c.chunk_start_offset, -1, 0, c) for c in chunks]
@@ -252,4 +262,4 @@ def iter_messages(fh, summary, channel_ids, *, log_time_order: bool = True, chun
             for t, p, ch, data in _chunk_messages(fh, item, wanted, heads, stats):
                 heapq.heappush(heap, (t, offset, p, ch, data))
             continue
-        yield channel, log_time, item
+        yield log_time, offset, place, channel, item

@@ -26,6 +26,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from .cdr import STAMP_BYTES, compressed_fields, header_stamp, image_fields, image_layout  # noqa: F401 - re-exported
+
 log = logging.getLogger(__name__)
 
 #: rig streams by their short name -> attribute of rig.desc.on_device.topics
@@ -221,68 +223,6 @@ def resolve_files(files: list[Path], recover: bool) -> tuple[list[Path], list[st
     return out, notes
 
 
-#: the bytes of a message's CDR data that :func:`header_stamp` reads: the encapsulation header, sec, nanosec
-STAMP_BYTES = 12
-
-
-def header_stamp(data: bytes) -> int:
-    """Header stamp (ns) of a CDR-serialised ROS 2 message that starts with std_msgs/Header."""
-    endian = "<" if data[1] == 1 else ">"
-    sec, nsec = struct.unpack_from(endian + "iI", data, 4)
-    return sec * 1_000_000_000 + nsec
-
-
-def _align(pos: int, n: int) -> int:
-    """CDR alignment, counted from the end of the 4-byte encapsulation header."""
-    return 4 + ((pos - 4 + n - 1) // n) * n
-
-
-def _cdr_string(data, pos: int, u32) -> tuple[str, int]:
-    """A CDR string at ``pos`` (length with its NUL, bytes): (the text, the position after it)."""
-    n = u32.unpack_from(data, pos)[0]
-    return bytes(data[pos + 4:pos + 4 + n]).rstrip(b"\0").decode("utf-8", "replace"), pos + 4 + n
-
-
-def image_fields(data) -> tuple[int, int, str, bool, int, int]:
-    """(height, width, encoding, is_bigendian, step, offset of the pixel bytes) of a CDR-serialised
-    sensor_msgs/Image (bytes or a memoryview), read from its fields without copying the pixels."""
-    endian = "<" if data[1] == 1 else ">"
-    u32 = struct.Struct(endian + "I")
-    _, pos = _cdr_string(data, 12, u32)                  # after encapsulation, stamp sec + nanosec: frame_id
-    pos = _align(pos, 4)
-    height, width = struct.unpack_from(endian + "II", data, pos)
-    encoding, pos = _cdr_string(data, pos + 8, u32)
-    bigendian = bool(data[pos])
-    pos = _align(pos + 1, 4)
-    step = u32.unpack_from(data, pos)[0]
-    pos = _align(pos + 4, 4)
-    n = u32.unpack_from(data, pos)[0]
-    pos += 4
-    if n < height * step or pos + n > len(data):
-        raise ValueError(f"sensor_msgs/Image of {height} rows x {step} bytes holds {n} bytes")
-    return height, width, encoding, bigendian, step, pos
-
-
-def image_layout(data: bytes) -> tuple[int, int, int, int]:
-    """(height, width, step, offset of the pixel bytes) of a CDR-serialised sensor_msgs/Image, read
-    from its fields without copying the pixels."""
-    height, width, _, _, step, pos = image_fields(data)
-    return height, width, step, pos
-
-
-def compressed_fields(data) -> tuple[str, int, int]:
-    """(format, offset, length of the compressed bytes) of a CDR-serialised sensor_msgs/CompressedImage."""
-    endian = "<" if data[1] == 1 else ">"
-    u32 = struct.Struct(endian + "I")
-    _, pos = _cdr_string(data, 12, u32)                  # frame_id
-    fmt, pos = _cdr_string(data, _align(pos, 4), u32)
-    pos = _align(pos, 4)
-    n = u32.unpack_from(data, pos)[0]
-    if pos + 4 + n > len(data):
-        raise ValueError(f"sensor_msgs/CompressedImage of {n} bytes holds {len(data) - pos - 4}")
-    return fmt, pos + 4, n
-
-
 def telemetry_rows(rig, width: int, height: int) -> int:
     """How many Boson telemetry rows (platform_tools.boson.telemetry) a thermal frame of ``width`` x
     ``height`` px carries below its image (0: none)."""
@@ -317,32 +257,15 @@ def _info(m, topic: str) -> dict:
             "k": [float(x) for x in m.k], "p": [float(x) for x in m.p]}
 
 
-def _messages(reader, fh, topics, stamps_only=()):
-    """(schema, channel, log time, data) of the ``topics``' messages of one open MCAP file in log-time order: read
-    straight from its chunks (:mod:`.mcapscan`: each decompressed once, data not copied) when it has a chunk index,
-    else through mcap's reader (a recovered or unindexed file). Of the ``stamps_only`` topics the data may be cut
-    after its first STAMP_BYTES (mcapscan then decompresses a chunk of such messages only as far as it must)."""
-    from . import mcapscan
-    summary = reader.get_summary()
-    if not mcapscan.has_chunk_index(summary):
-        for schema, channel, msg in reader.iter_messages(topics=topics, log_time_order=True):
-            yield schema, channel, msg.log_time, msg.data
-        return
-    ids = {cid for cid, c in summary.channels.items() if c.topic in set(topics)}
-    stamps_only = set(stamps_only)
-    heads = {cid: STAMP_BYTES for cid in ids if summary.channels[cid].topic in stamps_only}
-    for cid, log_time, data in mcapscan.iter_messages(fh, summary, ids, heads=heads):
-        channel = summary.channels[cid]
-        yield summary.schemas.get(channel.schema_id), channel, log_time, data
-
-
-def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, topic_map=None) -> Recording:
+def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, topic_map=None,
+                   pool=None) -> Recording:
     """Index a recording's rig streams (and the thermal FFC status, and its camera_info); ``topic_map``: a
-    :class:`.layout.Layout` from ``--topics`` (default: detected)."""
+    :class:`.layout.Layout` from ``--topics`` (default: detected); ``pool``: an :class:`.engines.Pool` whose workers
+    scan the files' chunks side by side (:mod:`.indexscan`), else they are scanned here."""
     from mcap.exceptions import McapError
     from mcap_ros2.decoder import DecoderFactory
 
-    from . import ffcstatus
+    from . import ffcstatus, indexscan, mcapscan
     from .layout import INFO_KEYS, LayoutError, detect
 
     name, files = mcap_files(path)
@@ -369,44 +292,57 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
             raise RecordingError(f"{channels[topic][1]}: {topic}: camera_info of type {channels[topic][0]}; "
                                  f"expected sensor_msgs/msg/CameraInfo")
     cols: dict[str, list] = {s: [] for s in by_topic.values()}
-    tails: dict[str, bytes] = {}
+    digests: dict[str, bytes] = {}
     status: dict[str, list[tuple[int, int]]] = {c: [] for c in status_topics.values()}
-    from_telemetry: dict[str, list[tuple[int, int]]] = {c: [] for c in ("thermal_left", "thermal_right")}
-    tele_rows: dict[tuple[str, int, int], int] = {}
+    from_telemetry: dict[str, list[tuple[int, int]]] = {c: [] for c in THERMAL}
     infos: dict[str, dict] = {}
     clock_steps: dict[str, dict[int, int]] = {c: {} for c in status_topics.values()}
     last_stamp: dict[str, int] = {}
     decoder = DecoderFactory()
-    decoders: dict[int, object] = {}
-    wanted = [t for t in list(by_topic) + list(status_topics) + list(info_topics) if t in channels]
-    #: the streams of which the index needs only the header stamp (a thermal frame's tail and telemetry are read too)
-    stamps_only = [t for t, s in by_topic.items() if not s.startswith("thermal")]
+    decoders: dict[tuple, object] = {}
+    model = rig.camera_model(rig.desc.sensors.thermal.camera_model)
+    wanted = indexscan.Wanted(
+        streams={t: s for t, s in by_topic.items() if t in channels},
+        others=frozenset(t for t in list(status_topics) + list(info_topics) if t in channels),
+        #: the streams of which the index needs only the header stamp (a thermal frame's tail and telemetry too)
+        stamps_only=frozenset(t for t, s in by_topic.items() if not s.startswith("thermal")),
+        telemetry_rows=rig.desc.on_device.thermal_telemetry_rows, model_px=(model.width_px, model.height_px))
     for fi, f in enumerate(files):
         try:
             with open(f, "rb") as fh:
-                for schema, channel, log_time, data in _messages(mcap_reader(fh, f), fh, wanted, stamps_only):
-                    s = by_topic.get(channel.topic)
-                    if s is not None:
-                        frozen, counter = False, -1
-                        stamp = header_stamp(data)
-                        if s.startswith("thermal"):
-                            tail, counter = _thermal_tail(data, s, stamp, rig, tele_rows, from_telemetry)
-                            frozen = tails.get(s) == tail
-                            tails[s] = tail
-                            last_stamp[s] = stamp
-                        cols[s].append((stamp, log_time, fi, frozen, counter))
-                        continue
-                    dec = decoders.get((fi, schema.id))
-                    if dec is None:
-                        dec = decoders[(fi, schema.id)] = decoder.decoder_for("cdr", schema)
-                    m = dec(bytes(data))
-                    if channel.topic in info_topics:
-                        infos[info_topics[channel.topic]] = _info(m, channel.topic)
-                        continue
-                    cam = status_topics[channel.topic]
-                    status[cam] += ffcstatus.rows(status_types[channel.topic], m, log_time, last_stamp.get(cam))
-                    if status_types[channel.topic] == ffcstatus.DIAGNOSTIC:
-                        clock_steps[cam].update(ffcstatus.clock_step_values(m))
+                reader = mcap_reader(fh, f)
+                summary = reader.get_summary()
+                if mcapscan.has_chunk_index(summary):
+                    events = indexscan.scan_file(f, summary, wanted, pool)
+                    schemas = {c.topic: summary.schemas.get(c.schema_id) for c in summary.channels.values()}
+                else:
+                    events, schemas = indexscan.scan_reader(reader, wanted)
+            for ev in events:
+                log_time, topic = ev[0], ev[3]
+                s = by_topic.get(topic)
+                if s is not None:
+                    _, _, _, _, stamp, digest, counter, ffc = ev
+                    frozen = False
+                    if digest is not None:            # a thermal frame
+                        frozen = digests.get(s) == digest
+                        digests[s] = digest
+                        last_stamp[s] = stamp
+                        if ffc >= 0:
+                            from_telemetry[s].append((stamp, ffc))
+                    cols[s].append((stamp, log_time, fi, frozen, counter))
+                    continue
+                schema = schemas[topic]
+                dec = decoders.get((fi, topic))
+                if dec is None:
+                    dec = decoders[(fi, topic)] = decoder.decoder_for("cdr", schema)
+                m = dec(ev[4])
+                if topic in info_topics:
+                    infos[info_topics[topic]] = _info(m, topic)
+                    continue
+                cam = status_topics[topic]
+                status[cam] += ffcstatus.rows(status_types[topic], m, log_time, last_stamp.get(cam))
+                if status_types[topic] == ffcstatus.DIAGNOSTIC:
+                    clock_steps[cam].update(ffcstatus.clock_step_values(m))
         except (McapError, EOFError, struct.error, ValueError) as exc:
             raise RecordingError(f"{f}: damaged MCAP ({type(exc).__name__}: {exc}); "
                                  f"run again with --recover to salvage what is readable") from None
@@ -436,30 +372,3 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
                     clock_step_values={c: v for c, v in clock_steps.items() if v})
     rec._topics = dict(topics)          # every topic of the layout (streams, status, camera_info)
     return rec
-
-
-def _thermal_tail(data: bytes, stream: str, stamp: int, rig, tele_rows: dict,
-                  from_telemetry: dict) -> tuple[bytes, int]:
-    """(the last 4 KiB of a thermal frame's image rows (to find frozen frames), its telemetry frame
-    counter or -1), after recording the FFC state of its telemetry rows, when it has some, in
-    ``from_telemetry``."""
-    from platform_tools.boson.telemetry import TelemetryError, decode_image_data
-    try:
-        height, width, step, off = image_layout(data)
-    except (struct.error, ValueError, IndexError):
-        return bytes(data[-4096:]), -1
-    key = (stream, width, height)
-    if key not in tele_rows:
-        tele_rows[key] = telemetry_rows(rig, width, height)
-    rows = tele_rows[key]
-    end = off + (height - rows) * step
-    counter = -1
-    if rows:
-        cam = stream  # thermal_left / thermal_right
-        try:
-            tel = decode_image_data(memoryview(data)[off:off + height * step], height, step, rows)
-            from_telemetry[cam].append((stamp, int(tel.ffc_status)))
-            counter = tel.frame_counter
-        except TelemetryError:
-            pass
-    return bytes(data[max(off, end - 4096):end]), counter

@@ -1,0 +1,73 @@
+"""Fields of CDR-serialised ROS 2 messages read straight from their bytes (a memoryview of a decompressed chunk is
+enough), without decoding the message or copying its pixels: a header stamp, a sensor_msgs/Image's layout, a
+sensor_msgs/CompressedImage's format and payload. One parser for the index's chunk scan (:mod:`.indexscan`, run
+in the export's workers) and the recording's readers (:mod:`.recording`, :mod:`.decode`).
+
+CDR: a 4-byte encapsulation header (its second byte 1 for little-endian), then the fields, each aligned to its size
+counted from the end of that header.
+"""
+from __future__ import annotations
+
+import struct
+
+
+#: the bytes of a message's CDR data that :func:`header_stamp` reads: the encapsulation header, sec, nanosec
+STAMP_BYTES = 12
+
+
+def header_stamp(data: bytes) -> int:
+    """Header stamp (ns) of a CDR-serialised ROS 2 message that starts with std_msgs/Header."""
+    endian = "<" if data[1] == 1 else ">"
+    sec, nsec = struct.unpack_from(endian + "iI", data, 4)
+    return sec * 1_000_000_000 + nsec
+
+
+def _align(pos: int, n: int) -> int:
+    """CDR alignment, counted from the end of the 4-byte encapsulation header."""
+    return 4 + ((pos - 4 + n - 1) // n) * n
+
+
+def _cdr_string(data, pos: int, u32) -> tuple[str, int]:
+    """A CDR string at ``pos`` (length with its NUL, bytes): (the text, the position after it)."""
+    n = u32.unpack_from(data, pos)[0]
+    return bytes(data[pos + 4:pos + 4 + n]).rstrip(b"\0").decode("utf-8", "replace"), pos + 4 + n
+
+
+def image_fields(data) -> tuple[int, int, str, bool, int, int]:
+    """(height, width, encoding, is_bigendian, step, offset of the pixel bytes) of a CDR-serialised
+    sensor_msgs/Image (bytes or a memoryview), read from its fields without copying the pixels."""
+    endian = "<" if data[1] == 1 else ">"
+    u32 = struct.Struct(endian + "I")
+    _, pos = _cdr_string(data, 12, u32)                  # after encapsulation, stamp sec + nanosec: frame_id
+    pos = _align(pos, 4)
+    height, width = struct.unpack_from(endian + "II", data, pos)
+    encoding, pos = _cdr_string(data, pos + 8, u32)
+    bigendian = bool(data[pos])
+    pos = _align(pos + 1, 4)
+    step = u32.unpack_from(data, pos)[0]
+    pos = _align(pos + 4, 4)
+    n = u32.unpack_from(data, pos)[0]
+    pos += 4
+    if n < height * step or pos + n > len(data):
+        raise ValueError(f"sensor_msgs/Image of {height} rows x {step} bytes holds {n} bytes")
+    return height, width, encoding, bigendian, step, pos
+
+
+def image_layout(data: bytes) -> tuple[int, int, int, int]:
+    """(height, width, step, offset of the pixel bytes) of a CDR-serialised sensor_msgs/Image, read
+    from its fields without copying the pixels."""
+    height, width, _, _, step, pos = image_fields(data)
+    return height, width, step, pos
+
+
+def compressed_fields(data) -> tuple[str, int, int]:
+    """(format, offset, length of the compressed bytes) of a CDR-serialised sensor_msgs/CompressedImage."""
+    endian = "<" if data[1] == 1 else ">"
+    u32 = struct.Struct(endian + "I")
+    _, pos = _cdr_string(data, 12, u32)                  # frame_id
+    fmt, pos = _cdr_string(data, _align(pos, 4), u32)
+    pos = _align(pos, 4)
+    n = u32.unpack_from(data, pos)[0]
+    if pos + 4 + n > len(data):
+        raise ValueError(f"sensor_msgs/CompressedImage of {n} bytes holds {len(data) - pos - 4}")
+    return fmt, pos + 4, n

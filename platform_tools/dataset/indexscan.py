@@ -1,0 +1,142 @@
+"""What the index keeps of each message of one MCAP file, read chunk by chunk: in runs of chunks side by side in the
+export's pool workers when it has them (:func:`scan_file`), else here.
+
+Of a rig stream's message: its header stamp; of a thermal frame also a digest of the last TAIL_BYTES of its image rows
+(two consecutive frames with equal digests: a frozen frame, the FFC), its Boson telemetry frame counter and FFC state.
+Of the other wanted topics (status, camera_info: small messages) the data itself, for the caller to decode.
+
+Why in parts: the thermal frames are read whole (their tails and telemetry rows end them), and decompressing them is
+most of an index's time (2.75 of 4.6 s of CPU on this project's simulated 60 s full-size recording,
+docs/dataset.md "Speed"), while the export's workers would wait for the plan. Every event carries its place in
+mcap's order (:func:`.mcapscan.iter_keyed`), so the parts merge back into the order one scan reads: the index is
+the same however the chunks were split (tests/dataset/test_dataset_indexscan.py).
+"""
+from __future__ import annotations
+
+import hashlib
+import heapq
+import struct
+from dataclasses import dataclass
+
+from .cdr import STAMP_BYTES, header_stamp, image_layout
+
+#: the bytes at the end of a thermal frame's image rows compared to find frozen frames
+TAIL_BYTES = 4096
+#: runs of chunks per pool worker: more parts even out the workers' shares (a run of cheap ZED chunks beside one
+#: of thermal ones) at the cost of one task each
+PARTS_PER_WORKER = 4
+#: the digest of a tail (blake2b): 16 bytes sent back per frame instead of TAIL_BYTES
+DIGEST_BYTES = 16
+
+
+@dataclass(frozen=True)
+class Wanted:
+    """What :func:`scan_part` reads, by topic."""
+    streams: dict                 # topic -> rig stream ("zed_left", "thermal_left", ...): stamp (and tail) read
+    others: frozenset             # topics whose whole data is returned (status, camera_info)
+    stamps_only: frozenset        # stream topics of which only the header stamp is read (STAMP_BYTES)
+    telemetry_rows: int           # rig: Boson telemetry rows below a thermal image (on_device.thermal_telemetry_rows)
+    model_px: tuple               # the thermal camera model's (width, height), to tell whether a frame has them
+
+    def topics(self) -> set:
+        return set(self.streams) | set(self.others)
+
+
+def _rows(wanted: Wanted, width: int, height: int) -> int:
+    from platform_tools.boson.telemetry import telemetry_rows_present
+    w, h = wanted.model_px
+    return wanted.telemetry_rows if telemetry_rows_present(width, height, w, h, wanted.telemetry_rows) else 0
+
+
+def thermal_fields(data, wanted: Wanted, rows_cache: dict) -> tuple[bytes, int, int]:
+    """(digest of the last TAIL_BYTES of a thermal frame's image rows, its telemetry frame counter or -1, its telemetry
+    FFC state or -1) of a CDR sensor_msgs/Image; a frame whose fields cannot be read: the digest of its last
+    TAIL_BYTES, -1, -1."""
+    from platform_tools.boson.telemetry import TelemetryError, decode_image_data
+    try:
+        height, width, step, off = image_layout(data)
+    except (struct.error, ValueError, IndexError):
+        return _digest(data[-TAIL_BYTES:]), -1, -1
+    if (width, height) not in rows_cache:
+        rows_cache[(width, height)] = _rows(wanted, width, height)
+    rows = rows_cache[(width, height)]
+    end = off + (height - rows) * step
+    counter = ffc = -1
+    if rows:
+        try:
+            tel = decode_image_data(memoryview(data)[off:off + height * step], height, step, rows)
+            counter, ffc = int(tel.frame_counter), int(tel.ffc_status)
+        except TelemetryError:
+            pass
+    return _digest(data[max(off, end - TAIL_BYTES):end]), counter, ffc
+
+
+def _digest(tail) -> bytes:
+    return hashlib.blake2b(tail, digest_size=DIGEST_BYTES).digest()
+
+
+def event(log_time: int, offset: int, place: int, topic: str, data, wanted: Wanted, rows_cache: dict) -> tuple:
+    """One message as the index keeps it: ``(log_time, offset, place, topic, stamp, digest, counter, ffc)`` for a rig
+    stream (``digest`` None, ``counter`` and ``ffc`` -1 but for thermal frames), ``(log_time, offset, place, topic,
+    data bytes)`` for the others."""
+    stream = wanted.streams.get(topic)
+    if stream is None:
+        return log_time, offset, place, topic, bytes(data)
+    stamp = header_stamp(data)
+    if not stream.startswith("thermal"):
+        return log_time, offset, place, topic, stamp, None, -1, -1
+    return (log_time, offset, place, topic, stamp) + thermal_fields(data, wanted, rows_cache)
+
+
+def scan_part(path: str, channels: dict, wanted: Wanted, chunks: list) -> list[tuple]:
+    """The :func:`event` of every wanted message in the ``chunks`` (mcap ChunkIndex records) of the MCAP file at
+    ``path``, in mcap's order; ``channels``: channel id -> topic, the wanted ones. Run in a pool worker or here.
+    Errors: the scan's (mcapscan.ScanError, a ValueError) and the file's (OSError)."""
+    from . import mcapscan
+    from .workers import keep_freed_memory
+    keep_freed_memory()                 # each chunk's buffers reuse the last one's pages (workers.keep_freed_memory)
+    heads = {cid: STAMP_BYTES for cid, t in channels.items() if t in wanted.stamps_only}
+    rows_cache: dict = {}
+    with open(path, "rb") as fh:
+        return [event(t, off, place, channels[cid], data, wanted, rows_cache)
+                for t, off, place, cid, data in mcapscan.iter_keyed(fh, None, channels, chunks=chunks, heads=heads)]
+
+
+def parts(chunks: list, n: int) -> list[list]:
+    """The chunks in file order cut into at most ``n`` contiguous runs of about equal uncompressed size."""
+    chunks = sorted(chunks, key=lambda c: c.chunk_start_offset)
+    total = sum(c.uncompressed_size for c in chunks) or 1
+    out, run, acc = [], [], 0
+    for c in chunks:
+        run.append(c)
+        acc += c.uncompressed_size
+        if acc >= total * (len(out) + 1) / n and len(out) < n - 1:
+            out.append(run)
+            run = []
+    if run:
+        out.append(run)
+    return out
+
+
+def scan_file(path, summary, wanted: Wanted, pool=None) -> list[tuple]:
+    """The :func:`event` of every wanted message of an indexed MCAP file (``summary``: its mcap Summary, with chunk
+    indexes), in mcap's log-time order; ``pool``: an :class:`.engines.Pool` whose workers scan runs of chunks side by
+    side (``pool.map``), else one scan here."""
+    channels = {cid: c.topic for cid, c in summary.channels.items() if c.topic in wanted.topics()}
+    chunks = [c for c in summary.chunk_indexes if channels.keys() & set(c.message_index_offsets)]
+    if pool is None or len(chunks) < 2:
+        return scan_part(str(path), channels, wanted, chunks)
+    runs = parts(chunks, PARTS_PER_WORKER * pool.workers)
+    return list(heapq.merge(*pool.map(scan_part, [(str(path), channels, wanted, run) for run in runs])))
+
+
+def scan_reader(reader, wanted: Wanted) -> tuple[list[tuple], dict]:
+    """:func:`scan_file` for a file without a chunk index (recovered, unindexed), through mcap's reader, here; with
+    the schema of each topic read (topic -> mcap Schema)."""
+    rows_cache: dict = {}
+    events, schemas = [], {}
+    for i, (schema, channel, msg) in enumerate(reader.iter_messages(topics=sorted(wanted.topics()),
+                                                                    log_time_order=True)):
+        schemas.setdefault(channel.topic, schema)
+        events.append(event(msg.log_time, 0, i, channel.topic, msg.data, wanted, rows_cache))
+    return events, schemas

@@ -1,0 +1,144 @@
+"""The index's chunk scan in parts (platform_tools.dataset.indexscan): however the chunks are split among the export's
+pool workers, the parts merge back into mcap's own order (checked against mcap's reader on a file with chunks that
+overlap in time and tie), and the recording's index is the same as one scan's, on a simulated recording, on one
+without its status topic (FFC state from telemetry) and on one written by rosbags; a damaged chunk met in a worker
+is one line naming the file."""
+from __future__ import annotations
+
+import io
+import json
+import shutil
+
+import numpy as np
+import pytest
+from mcap.reader import make_reader
+from mcap.writer import CompressionType, Writer
+
+from platform_tools.dataset import engines, indexscan
+from platform_tools.dataset.recording import RecordingError, open_recording
+from tests.dataset import rosbags_rig
+from tests.dataset.test_dataset_telemetry import without_status
+
+
+def _overlapping(path, seed=0) -> None:
+    """Three channels, 600 messages with log times jumping back and forth (chunks overlap in time) and repeated (ties
+    broken by file position), small zstd chunks."""
+    rng = np.random.default_rng(seed)
+    buf = io.BytesIO()
+    w = Writer(buf, chunk_size=2000, compression=CompressionType.ZSTD)
+    w.start()
+    sid = w.register_schema("s", "raw", b"")
+    chans = [w.register_channel(f"/t{i}", "raw", sid) for i in range(3)]
+    for n in range(600):
+        log = int(rng.integers(0, 50)) * 1000 + (n // 100) * 20_000
+        w.add_message(chans[n % 3], log_time=log, publish_time=log, sequence=n,
+                      data=rng.integers(0, 255, int(rng.integers(1, 300)), dtype=np.uint8).tobytes())
+    w.finish()
+    path.write_bytes(buf.getvalue())
+
+
+def _raw(topics) -> indexscan.Wanted:
+    return indexscan.Wanted(streams={}, others=frozenset(topics), stamps_only=frozenset(), telemetry_rows=0,
+                            model_px=(640, 512))
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 7, 1000])
+def test_parts_merge_back_into_mcaps_order(tmp_path, n):
+    f = tmp_path / "a.mcap"
+    _overlapping(f)
+    with open(f, "rb") as fh:
+        reader = make_reader(fh)
+        summary = reader.get_summary()
+        want = [(c.topic, m.log_time, m.data) for _, c, m in
+                reader.iter_messages(topics=["/t0", "/t2"], log_time_order=True)]
+    channels = {cid: c.topic for cid, c in summary.channels.items() if c.topic != "/t1"}
+    chunks = [c for c in summary.chunk_indexes if channels.keys() & set(c.message_index_offsets)]
+    runs = indexscan.parts(chunks, n)
+    assert len(runs) == min(n, len(chunks)) and sum(runs, []) == sorted(chunks, key=lambda c: c.chunk_start_offset)
+    import heapq
+    merged = list(heapq.merge(*[indexscan.scan_part(str(f), channels, _raw(["/t0", "/t2"]), r) for r in runs]))
+    assert [(e[3], e[0], e[4]) for e in merged] == want and len(want) == 400
+    assert [t for _, t, _ in want] != sorted(t for _, t, _ in want)[::-1]
+
+
+def test_parts_are_of_about_equal_size():
+    class C:
+        def __init__(self, off, size):
+            self.chunk_start_offset, self.uncompressed_size = off, size
+    rng = np.random.default_rng(1)
+    chunks = [C(i, int(s)) for i, s in enumerate(rng.integers(1000, 3000, 400))]
+    runs = indexscan.parts(list(reversed(chunks)), 8)
+    sizes = [sum(c.uncompressed_size for c in r) for r in runs]
+    assert len(runs) == 8 and max(sizes) - min(sizes) <= 2 * 3000
+    assert [c.chunk_start_offset for r in runs for c in r] == list(range(400))
+
+
+def _same(a, b) -> None:
+    assert a.streams.keys() == b.streams.keys()
+    for s, st in a.streams.items():
+        other = b.streams[s]
+        for field in ("stamp_ns", "log_ns", "file_index", "frozen", "counter"):
+            x, y = getattr(st, field), getattr(other, field)
+            assert (x is None) == (y is None), (s, field)
+            if x is not None:
+                np.testing.assert_array_equal(x, y, err_msg=f"{s}.{field}")
+    assert a.status == b.status and a.status_source == b.status_source
+    assert a.camera_info == b.camera_info and a.status_lag_frames == b.status_lag_frames
+    assert a.clock_step_values == b.clock_step_values
+
+
+@pytest.fixture(scope="module")
+def pool():
+    p = engines.Pool(2)
+    yield p
+    p.close()
+
+
+@pytest.fixture(scope="module")
+def recordings(sim, rig, tmp_path_factory):
+    root = tmp_path_factory.mktemp("indexscan")
+    without_status(sim[0], root / "nostatus", rig)
+    rosbags_rig.write(root / "rosbags", rosbags_rig.Spec(telemetry=True, camera_info=True, steps=((60, 20.0, "zed"),)),
+                      rosbags_rig.project_layout(rig))
+    return {"sim": sim[0], "nostatus": root / "nostatus", "rosbags": root / "rosbags"}
+
+
+@pytest.mark.parametrize("name", ["sim", "nostatus", "rosbags"])
+@pytest.mark.parametrize("per_worker", [indexscan.PARTS_PER_WORKER, 1000])
+def test_the_index_is_the_same_scanned_in_parts(recordings, name, per_worker, rig, pool, monkeypatch):
+    monkeypatch.setattr(indexscan, "PARTS_PER_WORKER", per_worker)
+    one = open_recording(recordings[name], rig)
+    split = open_recording(recordings[name], rig, pool=pool)
+    _same(one, split)
+    thermal = one.streams["thermal_left"]
+    assert len(thermal.stamp_ns) > 50 and thermal.frozen.any()      # non-trivial: frozen frames were found
+    if name != "sim":
+        assert one.status_source["thermal_left"] == ("telemetry" if name == "nostatus" else "status")
+
+
+def test_a_damaged_chunk_met_in_a_worker_is_one_line(sim, rig, pool, tmp_path):
+    dst = tmp_path / "rec"
+    shutil.copytree(sim[0], dst)
+    bag = next((dst / "bag").glob("*.mcap"))
+    data = bytearray(bag.read_bytes())
+    summary = make_reader(io.BytesIO(bytes(data))).get_summary()
+    c = summary.chunk_indexes[len(summary.chunk_indexes) // 2]
+    end = c.chunk_start_offset + c.chunk_length
+    data[end - 400:end - 8] = bytes(392)
+    bag.write_bytes(bytes(data))
+    with pytest.raises(RecordingError) as exc:
+        open_recording(dst, rig, pool=pool)
+    msg = str(exc.value)
+    assert str(bag) in msg and "damaged MCAP" in msg and "\n" not in msg
+    _same(open_recording(sim[0], rig, pool=pool), open_recording(sim[0], rig))    # the pool still works
+
+
+def test_sync_check_with_workers_reports_what_one_process_does(platform_tools, recordings):
+    runs = [platform_tools("sync-check", str(recordings["rosbags"]), "--json", "--workers", n) for n in ("1", "2")]
+    # the recording's 5 missing trigger pulses (of 150) fail the 2 % drop limit: exit 1 from both, nothing else fails
+    assert [r.returncode for r in runs] == [1, 1], runs[1].stderr
+    one, two = (json.loads(r.stdout) for r in runs)
+    assert one == two and one["triggers"] and one["verdict"] == "fail"
+    assert {c["check"].split()[-1] for c in one["checks"] if not c["ok"]} == {"drops"}
+    bad = platform_tools("sync-check", str(recordings["rosbags"]), "--workers", "0")
+    assert bad.returncode == 2 and "--workers 0" in bad.stderr and bad.stdout == ""
