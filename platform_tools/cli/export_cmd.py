@@ -32,8 +32,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", metavar="DIR", required=True, type=Path, help="the dataset folder (created; resumed)")
     p.add_argument("--rate", type=float, default=None, metavar="HZ",
                    help="samples per second (default processing.pair_rate_hz)")
-    p.add_argument("--workers", type=int, default=1, metavar="N",
-                   help="worker processes (default 1); forked on Linux, see PLATFORM_TOOLS_EXPORT_WORKERS below")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="worker processes (default: the CPUs this process may use; 1: everything in this "
+                        "process); forked on Linux, see PLATFORM_TOOLS_EXPORT_WORKERS below")
     p.add_argument("--engine", choices=("pool", "dask"), default="pool",
                    help="pool: a process pool on this machine (default); dask: dask.distributed, a local "
                         "cluster of --workers processes or --scheduler's")
@@ -77,7 +78,7 @@ EXIT_INTERRUPTED = 130
 
 
 #: (option, attribute, default) of the options that go into the dataset card's command line when not default
-_OPTIONS = (("--rate", "rate", None), ("--workers", "workers", 1), ("--engine", "engine", "pool"),
+_OPTIONS = (("--rate", "rate", None), ("--workers", "workers", None), ("--engine", "engine", "pool"),
             ("--scheduler", "scheduler", None), ("--calibration", "calibration", None), ("--topics", "topics", None),
             ("--depth", "depth", "auto"), ("--tolerance-ms", "tolerance_ms", None), ("--ffc-margin", "ffc_margin", None),
             ("--keep-ffc", "keep_ffc", False), ("--chunk-size", "chunk_size", 8), ("--paper", "paper", False),
@@ -103,12 +104,13 @@ def _terminated(signum, frame):
 
 
 def cmd_export(args: argparse.Namespace) -> int:
+    from ..dataset.engines import usable_cpus
     from ..dataset.export import PAPER_OUTPUTS, PAPER_RATE_HZ, ExportError, Params, export
     from ..dataset.layout import LayoutError, load_topic_map
     from ..dataset.stereo import BUILT_IN, StereoError, load_plugin
     if args.rate is not None and not 0 < args.rate <= 1000:
         raise UserError(f"--rate {args.rate:g}: expected more than 0 and at most 1000 Hz")
-    if args.workers < 1:
+    if args.workers is not None and args.workers < 1:
         raise UserError(f"--workers {args.workers}: expected 1 or more")
     if args.chunk_size < 1:
         raise UserError(f"--chunk-size {args.chunk_size}: expected 1 or more")
@@ -140,7 +142,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     previous = signal.signal(signal.SIGTERM, _terminated)
     try:
         summary = export(args.recordings, args.out, rig, params, calibration=args.calibration, engine=args.engine,
-                         workers=args.workers, scheduler=args.scheduler, recover=args.recover,
+                         workers=args.workers or usable_cpus(), scheduler=args.scheduler, recover=args.recover,
                          topic_map=topic_map, command=command_line(args))
     except ExportError as exc:
         raise UserError(str(exc)) from None

@@ -35,9 +35,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--calibration", metavar="DIR", type=Path,
                    help="report this folder of .cameramodel files as the calibration (default: the recording's "
                         "camera_info, else the rig's nominal models); the export uses the same rule")
-    p.add_argument("--workers", type=int, default=1, metavar="N",
-                   help="processes that read the recording's chunks side by side (default 1: this process alone); "
-                        "the index takes about half the time with 2 on 2 cores")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="processes that read the recording's chunks side by side (default: the CPUs this process "
+                        "may use; 1: this process alone); on 2 cores 2 take about half the time of 1")
     add_rig_options(p)
     add_output_options(p)
     p.set_defaults(handler=cmd_sync_check)
@@ -87,13 +87,13 @@ def cmd_sync_check(args: argparse.Namespace) -> int:
     from ..dataset.layout import LayoutError, load_topic_map
     from ..dataset.recording import RecordingError, open_recording
     from ..dataset.sync import Limits, analyse
-    from ..dataset.engines import EngineError, started
+    from ..dataset.engines import EngineError, started, usable_cpus
     rig = rig_from_args(args)
-    if args.workers < 1:
+    if args.workers is not None and args.workers < 1:
         raise UserError(f"--workers {args.workers}: expected 1 or more")
     try:
         topic_map = load_topic_map(args.topics) if args.topics else None
-        with started("pool", args.workers) as pool:
+        with started("pool", args.workers or usable_cpus()) as pool:
             rec = open_recording(args.recording, rig, recover=args.recover, topic_map=topic_map, pool=pool)
         report = analyse(rec, rig, Limits.from_rig(rig))
         cal = for_recording(rig, rec, args.calibration)

@@ -41,6 +41,16 @@ START_ENV = "PLATFORM_TOOLS_EXPORT_WORKERS"
 START_METHODS = ("spawn", "fork")
 
 
+def usable_cpus() -> int:
+    """The CPUs this process may run on (its affinity mask: a container's or taskset's limit, not the machine's
+    count): the default number of workers of export and sync-check."""
+    import os
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:                  # no sched_getaffinity (macOS, Windows)
+        return max(1, os.cpu_count() or 1)
+
+
 def default_start_method() -> str:
     """The start method when START_ENV is unset: "fork" on Linux, "spawn" elsewhere (Windows has no fork; on macOS
     forking a process that loaded system frameworks is unsafe). Also "spawn" in a process already running other

@@ -328,7 +328,7 @@ def _export(recordings, out, rig, params, *, calibration, engine, workers, sched
         manifest |= {"status": "complete", "rows": len(rows)}
         atomic.write_text(out / MANIFEST, json.dumps(manifest, indent=2) + "\n")
     return {"out": str(out), "samples": len(rows), "chunks": len(tasks), "chunks_run": len(todo),
-            "resumed": resumed, "engine": engine, "recordings": idents,
+            "resumed": resumed, "engine": engine, "workers": workers, "recordings": idents,
             "calibration": calibration_used}
 
 

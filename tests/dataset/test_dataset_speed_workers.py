@@ -323,3 +323,24 @@ def test_the_export_help_names_the_default_and_the_variable():
     assert r.returncode == 0, r.stderr
     text = " ".join(r.stdout.split())
     assert f"{engines.START_ENV}=fork|spawn" in text and "forked from this process after one warm-up on Linux" in text
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="no CPU affinity here")
+def test_export_and_sync_check_default_to_the_cpus_they_may_use(sim, tmp_path):
+    """No --workers: as many workers as the process's CPU affinity allows (a container's or taskset's limit), one
+    when it allows one; the export's JSON says how many ran."""
+    cpus = sorted(os.sched_getaffinity(0))
+
+    def run(allowed, *args):
+        return subprocess.run([sys.executable, "-m", "platform_tools.cli.main", *args], cwd=REPO,
+                              capture_output=True, text=True, timeout=300,
+                              preexec_fn=lambda: os.sched_setaffinity(0, allowed))
+    assert engines.usable_cpus() == len(cpus)
+    for allowed in ({cpus[0]}, set(cpus)):
+        r = run(allowed, "export", str(sim[0]), "--out", str(tmp_path / f"out{len(allowed)}"), "--rate", "1", "--json")
+        assert r.returncode == 0, r.stderr
+        assert json.loads(r.stdout)["workers"] == len(allowed)
+    one = run({cpus[0]}, "sync-check", str(sim[0]), "--json", "--set", "processing.sync_limits.max_drop_percent=6")
+    every = run(set(cpus), "sync-check", str(sim[0]), "--json", "--set", "processing.sync_limits.max_drop_percent=6")
+    assert one.returncode == every.returncode == 0, every.stderr
+    assert json.loads(one.stdout) == json.loads(every.stdout)
