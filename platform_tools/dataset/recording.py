@@ -304,7 +304,7 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
     wanted = indexscan.Wanted(
         streams={t: s for t, s in by_topic.items() if t in channels},
         others=frozenset(t for t in list(status_topics) + list(info_topics) if t in channels),
-        #: the streams of which the index needs only the header stamp (a thermal frame's tail and telemetry too)
+        # the streams of which the index needs only the header stamp (of a thermal frame: its tail and telemetry too)
         stamps_only=frozenset(t for t, s in by_topic.items() if not s.startswith("thermal")),
         telemetry_rows=rig.desc.on_device.thermal_telemetry_rows, model_px=(model.width_px, model.height_px))
     for fi, f in enumerate(files):
