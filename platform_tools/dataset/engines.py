@@ -119,13 +119,22 @@ class Pool:
             self.close(abort=True)
             raise
 
-    def map(self, fn, args: list[tuple]) -> list:
+    def map(self, fn, args: list[tuple], done=None) -> list:
         """``fn(*a)`` for each ``a`` of ``args`` in the workers, the results in that order (the index's chunk scans,
-        :mod:`.indexscan`). An error of ``fn`` cancels what is queued and goes on here; an interrupt stops every worker
-        (as :meth:`run`)."""
+        :mod:`.indexscan`); ``done(k)`` is called here as the k-th ends (a progress bar). An error of ``fn`` cancels
+        what is queued and goes on here; an interrupt stops every worker (as :meth:`run`)."""
+        from concurrent.futures import FIRST_COMPLETED, wait
         futures = []
         try:
             futures = [self._pool.submit(fn, *a) for a in args]
+            place = {f: k for k, f in enumerate(futures)}
+            pending = set(futures)
+            while pending:
+                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for f in finished:
+                    f.result()                  # an error ends the map now
+                    if done is not None:
+                        done(place[f])
             return [f.result() for f in futures]
         except Exception:
             for f in futures:

@@ -17,6 +17,7 @@ import hashlib
 import heapq
 import struct
 from dataclasses import dataclass
+from pathlib import Path
 
 from .cdr import STAMP_BYTES, header_stamp, image_layout
 
@@ -25,6 +26,8 @@ TAIL_BYTES = 4096
 #: runs of chunks per pool worker: more parts even out the workers' shares (a run of cheap ZED chunks beside one
 #: of thermal ones) at the cost of one task each
 PARTS_PER_WORKER = 4
+#: runs of chunks scanned one after another without a pool: the progress bar's steps
+SERIAL_PARTS = 16
 #: the digest of a tail (blake2b): 16 bytes sent back per frame instead of TAIL_BYTES
 DIGEST_BYTES = 16
 
@@ -121,13 +124,24 @@ def parts(chunks: list, n: int) -> list[list]:
 def scan_file(path, summary, wanted: Wanted, pool=None) -> list[tuple]:
     """The :func:`event` of every wanted message of an indexed MCAP file (``summary``: its mcap Summary, with chunk
     indexes), in mcap's log-time order; ``pool``: an :class:`.engines.Pool` whose workers scan runs of chunks side by
-    side (``pool.map``), else one scan here."""
+    side (``pool.map``), else the runs are scanned here one after another. A progress bar counts the chunks."""
+    from platform_tools.rig.progress import progress
     channels = {cid: c.topic for cid, c in summary.channels.items() if c.topic in wanted.topics()}
     chunks = [c for c in summary.chunk_indexes if channels.keys() & set(c.message_index_offsets)]
-    if pool is None or len(chunks) < 2:
-        return scan_part(str(path), channels, wanted, chunks)
-    runs = parts(chunks, PARTS_PER_WORKER * pool.workers)
-    return list(heapq.merge(*pool.map(scan_part, [(str(path), channels, wanted, run) for run in runs])))
+    runs = parts(chunks, SERIAL_PARTS if pool is None else PARTS_PER_WORKER * pool.workers)
+    args = [(str(path), channels, wanted, run) for run in runs]
+    bar = progress(range(len(chunks)), desc=f"index {Path(path).name}", total=len(chunks), unit="chunk")
+    try:
+        if pool is None or len(runs) < 2:
+            results = []
+            for a in args:
+                results.append(scan_part(*a))
+                bar.update(len(a[3]))
+        else:
+            results = pool.map(scan_part, args, done=lambda k: bar.update(len(runs[k])))
+    finally:
+        bar.close()
+    return list(heapq.merge(*results))
 
 
 def scan_reader(reader, wanted: Wanted) -> tuple[list[tuple], dict]:

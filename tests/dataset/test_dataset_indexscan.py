@@ -142,3 +142,40 @@ def test_sync_check_with_workers_reports_what_one_process_does(platform_tools, r
     assert {c["check"].split()[-1] for c in one["checks"] if not c["ok"]} == {"drops"}
     bad = platform_tools("sync-check", str(recordings["rosbags"]), "--workers", "0")
     assert bad.returncode == 2 and "--workers 0" in bad.stderr and bad.stdout == ""
+
+
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_the_index_shows_its_progress_on_a_terminal(sim, workers):
+    """stderr a terminal (a pseudo-terminal of 120 columns here): a bar named after the file, counting its chunks
+    (tqdm draws it at the start and redraws it at most every 0.1 s, so only the first state is sure to be seen);
+    stdout the report alone."""
+    import fcntl
+    import os
+    import pty
+    import struct
+    import subprocess
+    import sys
+    import termios
+
+    from tests.conftest import REPO
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 40, 120, 0, 0))
+    r = subprocess.run([sys.executable, "-m", "platform_tools.cli.main", "sync-check", str(sim[0]), "--json",
+                        "--workers", workers, "--set", "processing.sync_limits.max_drop_percent=6"],
+                       cwd=REPO, stdout=subprocess.PIPE, stderr=slave, text=True, timeout=300)
+    os.close(slave)
+    seen = b""
+    while True:
+        try:
+            got = os.read(master, 65536)
+        except OSError:                     # EIO: the terminal's other side is closed and drained
+            break
+        if not got:
+            break
+        seen += got
+    os.close(master)
+    assert r.returncode == 0 and json.loads(r.stdout)["verdict"] == "pass"
+    text = seen.decode(errors="replace")
+    bag = next((sim[0] / "bag").glob("*.mcap"))
+    n = len(make_reader(open(bag, "rb")).get_summary().chunk_indexes)
+    assert f"index {bag.name}:" in text and f"0/{n} [" in text and "chunk" in text
