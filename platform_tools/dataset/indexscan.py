@@ -121,9 +121,9 @@ def parts(chunks: list, n: int) -> list[list]:
     return out
 
 
-def scan_file(path, summary, wanted: Wanted, pool=None) -> list[tuple]:
+def scan_file(path, summary, wanted: Wanted, pool=None):
     """The :func:`event` of every wanted message of an indexed MCAP file (``summary``: its mcap Summary, with chunk
-    indexes), in mcap's log-time order; ``pool``: an :class:`.engines.Pool` whose workers scan runs of chunks side by
+    indexes), in mcap's log-time order (an iterator over the runs' lists, merged as it is read); ``pool``: an :class:`.engines.Pool` whose workers scan runs of chunks side by
     side (``pool.map``), else the runs are scanned here one after another. A progress bar counts the chunks."""
     from platform_tools.rig.progress import progress
     channels = {cid: c.topic for cid, c in summary.channels.items() if c.topic in wanted.topics()}
@@ -141,7 +141,7 @@ def scan_file(path, summary, wanted: Wanted, pool=None) -> list[tuple]:
             results = pool.map(scan_part, args, done=lambda k: bar.update(len(runs[k])))
     finally:
         bar.close()
-    return list(heapq.merge(*results))
+    return heapq.merge(*results)
 
 
 def scan_reader(reader, wanted: Wanted) -> tuple[list[tuple], dict]:
