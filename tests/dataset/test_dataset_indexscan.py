@@ -12,29 +12,13 @@ import shutil
 import numpy as np
 import pytest
 from mcap.reader import make_reader
-from mcap.writer import CompressionType, Writer
+from mcap.writer import CompressionType
 
 from platform_tools.dataset import engines, indexscan
 from platform_tools.dataset.recording import RecordingError, open_recording
 from tests.dataset import rosbags_rig
+from tests.dataset.test_dataset_speed_scan import _mcap_file
 from tests.dataset.test_dataset_telemetry import without_status
-
-
-def _overlapping(path, seed=0) -> None:
-    """Three channels, 600 messages with log times jumping back and forth (chunks overlap in time) and repeated (ties
-    broken by file position), small zstd chunks."""
-    rng = np.random.default_rng(seed)
-    buf = io.BytesIO()
-    w = Writer(buf, chunk_size=2000, compression=CompressionType.ZSTD)
-    w.start()
-    sid = w.register_schema("s", "raw", b"")
-    chans = [w.register_channel(f"/t{i}", "raw", sid) for i in range(3)]
-    for n in range(600):
-        log = int(rng.integers(0, 50)) * 1000 + (n // 100) * 20_000
-        w.add_message(chans[n % 3], log_time=log, publish_time=log, sequence=n,
-                      data=rng.integers(0, 255, int(rng.integers(1, 300)), dtype=np.uint8).tobytes())
-    w.finish()
-    path.write_bytes(buf.getvalue())
 
 
 def _raw(topics) -> indexscan.Wanted:
@@ -45,7 +29,7 @@ def _raw(topics) -> indexscan.Wanted:
 @pytest.mark.parametrize("n", [1, 2, 3, 7, 1000])
 def test_parts_merge_back_into_mcaps_order(tmp_path, n):
     f = tmp_path / "a.mcap"
-    _overlapping(f)
+    f.write_bytes(_mcap_file(CompressionType.ZSTD))      # zstd chunks that overlap in time, ties
     with open(f, "rb") as fh:
         reader = make_reader(fh)
         summary = reader.get_summary()
