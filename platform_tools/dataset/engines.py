@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import sys
+from concurrent.futures.process import BrokenProcessPool
 
 from platform_tools.rig.progress import progress
 
@@ -75,6 +76,12 @@ def start_method() -> str:
     return method
 
 
+def _died(exc: Exception) -> EngineError:
+    """A worker that died (a signal, the kernel's out-of-memory killer) as one line, with what to do."""
+    return EngineError(f"a worker process died ({exc}); the kernel's log says why (dmesg: out of memory?); run "
+                       f"again with fewer --workers (each holds a few hundred MB at full size)")
+
+
 class Pool:
     """A process pool of workers that end with this process (workers.die_with_parent), started at once and warm:
     ``warm_up`` (imports, numba's kernels loaded; no OpenCV call) runs in each spawned worker as it starts, or
@@ -115,6 +122,9 @@ class Pool:
                     t = pending.pop(f)
                     finished(t, f.result())
                     next(bar, None)
+        except BrokenProcessPool as exc:
+            self.close(abort=True)
+            raise _died(exc) from None
         except BaseException:
             self.close(abort=True)
             raise
@@ -136,6 +146,9 @@ class Pool:
                     if done is not None:
                         done(place[f])
             return [f.result() for f in futures]
+        except BrokenProcessPool as exc:
+            self.close(abort=True)
+            raise _died(exc) from None
         except Exception:
             for f in futures:
                 f.cancel()

@@ -241,7 +241,7 @@ def _export(recordings, out, rig, params, *, calibration, engine, workers, sched
                       ffc_margin=params.ffc_margin, keep_ffc=params.keep_ffc, depth=recorded_depth)
             cal = fixed or for_recording(rig, rec)
             right = None if recorded_depth else zed_right(rig, rec, calibration)
-        except (RecordingError, CalibrationError) as exc:
+        except (RecordingError, CalibrationError, EngineError) as exc:
             raise ExportError(str(exc)) from None
         if rec.name in names:
             raise ExportError(f"{path}: two recordings named {rec.name!r}; give each a distinct folder name")

@@ -163,3 +163,19 @@ def test_the_index_shows_its_progress_on_a_terminal(sim, workers):
     bag = next((sim[0] / "bag").glob("*.mcap"))
     n = len(make_reader(open(bag, "rb")).get_summary().chunk_indexes)
     assert f"index {bag.name}:" in text and f"0/{n} [" in text and "chunk" in text
+
+
+@pytest.mark.parametrize("how", ["map", "run"])
+def test_a_worker_that_dies_is_one_line_and_the_others_are_stopped(how):
+    """A worker killed under the pool (here it exits at once, as one killed by the out-of-memory killer would
+    vanish): one line naming what happened and what to do, not concurrent.futures' BrokenProcessPool traceback."""
+    import os
+    p = engines.Pool(2)
+    with pytest.raises(engines.EngineError) as exc:
+        if how == "map":
+            p.map(os._exit, [(3,), (3,)])
+        else:
+            p.run(os._exit, [3, 3], lambda t, r: None)
+    assert "a worker process died" in str(exc.value) and "--workers" in str(exc.value) and "\n" not in str(exc.value)
+    import multiprocessing
+    assert [c for c in multiprocessing.active_children() if c not in p._before] == []     # every worker reaped
