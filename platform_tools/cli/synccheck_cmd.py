@@ -87,7 +87,7 @@ def cmd_sync_check(args: argparse.Namespace) -> int:
     from ..dataset.layout import LayoutError, load_topic_map
     from ..dataset.recording import RecordingError, open_recording
     from ..dataset.sync import Limits, analyse
-    from ..dataset.engines import EngineError, started, usable_cpus
+    from ..dataset.engines import EngineError, started, stdlib_distutils, usable_cpus
     rig = rig_from_args(args)
     if args.workers is not None and args.workers < 1:
         raise UserError(f"--workers {args.workers}: expected 1 or more")
@@ -96,7 +96,8 @@ def cmd_sync_check(args: argparse.Namespace) -> int:
         with started("pool", args.workers or usable_cpus()) as pool:
             rec = open_recording(args.recording, rig, recover=args.recover, topic_map=topic_map, pool=pool)
         report = analyse(rec, rig, Limits.from_rig(rig))
-        cal = for_recording(rig, rec, args.calibration)
+        with stdlib_distutils():          # mrcal imported without setuptools' distutils (engines.stdlib_distutils)
+            cal = for_recording(rig, rec, args.calibration)
     except (RecordingError, LayoutError, CalibrationError, EngineError) as exc:
         raise UserError(str(exc)) from None
     report["layout"] = rec.layout
