@@ -45,10 +45,12 @@ class Wanted:
         return set(self.streams) | set(self.others)
 
 
-def _rows(wanted: Wanted, width: int, height: int) -> int:
+def rows_below(rows: int, model_px: tuple, width: int, height: int) -> int:
+    """How many of the rig's ``rows`` Boson telemetry rows (platform_tools.boson.telemetry) a thermal frame of
+    ``width`` x ``height`` px carries below its image, for a camera model of ``model_px`` (width, height): ``rows``
+    or 0."""
     from platform_tools.boson.telemetry import telemetry_rows_present
-    w, h = wanted.model_px
-    return wanted.telemetry_rows if telemetry_rows_present(width, height, w, h, wanted.telemetry_rows) else 0
+    return rows if telemetry_rows_present(width, height, model_px[0], model_px[1], rows) else 0
 
 
 def thermal_fields(data, wanted: Wanted, rows_cache: dict) -> tuple[bytes, int, int]:
@@ -61,7 +63,7 @@ def thermal_fields(data, wanted: Wanted, rows_cache: dict) -> tuple[bytes, int, 
     except (struct.error, ValueError, IndexError):
         return _digest(data[-TAIL_BYTES:]), -1, -1
     if (width, height) not in rows_cache:
-        rows_cache[(width, height)] = _rows(wanted, width, height)
+        rows_cache[(width, height)] = rows_below(wanted.telemetry_rows, wanted.model_px, width, height)
     rows = rows_cache[(width, height)]
     end = off + (height - rows) * step
     counter = ffc = -1
@@ -123,8 +125,9 @@ def parts(chunks: list, n: int) -> list[list]:
 
 def scan_file(path, summary, wanted: Wanted, pool=None):
     """The :func:`event` of every wanted message of an indexed MCAP file (``summary``: its mcap Summary, with chunk
-    indexes), in mcap's log-time order (an iterator over the runs' lists, merged as it is read); ``pool``: an :class:`.engines.Pool` whose workers scan runs of chunks side by
-    side (``pool.map``), else the runs are scanned here one after another. A progress bar counts the chunks."""
+    indexes), in mcap's log-time order (an iterator over the runs' lists, merged as it is read); ``pool``: an
+    :class:`.engines.Pool` whose workers scan runs of chunks side by side (``pool.map``), else the runs are scanned
+    here one after another. A progress bar counts the chunks."""
     from platform_tools.rig.progress import progress
     channels = {cid: c.topic for cid, c in summary.channels.items() if c.topic in wanted.topics()}
     chunks = [c for c in summary.chunk_indexes if channels.keys() & set(c.message_index_offsets)]

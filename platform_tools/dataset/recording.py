@@ -226,10 +226,14 @@ def resolve_files(files: list[Path], recover: bool) -> tuple[list[Path], list[st
 def telemetry_rows(rig, width: int, height: int) -> int:
     """How many Boson telemetry rows (platform_tools.boson.telemetry) a thermal frame of ``width`` x
     ``height`` px carries below its image (0: none)."""
-    from platform_tools.boson.telemetry import telemetry_rows_present
-    rows = rig.desc.on_device.thermal_telemetry_rows
+    from .indexscan import rows_below
+    return rows_below(rig.desc.on_device.thermal_telemetry_rows, _thermal_px(rig), width, height)
+
+
+def _thermal_px(rig) -> tuple[int, int]:
+    """(width, height) in px of the rig's thermal camera model."""
     model = rig.camera_model(rig.desc.sensors.thermal.camera_model)
-    return rows if telemetry_rows_present(width, height, model.width_px, model.height_px, rows) else 0
+    return model.width_px, model.height_px
 
 
 def _channels(files: list[Path]) -> dict[str, tuple[str, Path]]:
@@ -300,13 +304,12 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
     last_stamp: dict[str, int] = {}
     decoder = DecoderFactory()
     decoders: dict[tuple, object] = {}
-    model = rig.camera_model(rig.desc.sensors.thermal.camera_model)
     wanted = indexscan.Wanted(
         streams={t: s for t, s in by_topic.items() if t in channels},
         others=frozenset(t for t in list(status_topics) + list(info_topics) if t in channels),
         # the streams of which the index needs only the header stamp (of a thermal frame: its tail and telemetry too)
         stamps_only=frozenset(t for t, s in by_topic.items() if not s.startswith("thermal")),
-        telemetry_rows=rig.desc.on_device.thermal_telemetry_rows, model_px=(model.width_px, model.height_px))
+        telemetry_rows=rig.desc.on_device.thermal_telemetry_rows, model_px=_thermal_px(rig))
     for fi, f in enumerate(files):
         try:
             with open(f, "rb") as fh:
