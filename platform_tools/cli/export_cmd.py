@@ -66,6 +66,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "null there: the export's own writer, ISA-L deflate level 1 with the UP filter, about 3x "
                         "faster than libpng's level 1, the same pixels); 6 is several times slower and smaller "
                         "(docs/dataset.md)")
+    p.add_argument("--zed-images", choices=("as_recorded", "png"), default=None,
+                   help="the ZED images: as_recorded writes a compressed topic's JPEG as the recording holds it, byte "
+                        "for byte (smaller, faster, no second encoding), a raw topic as PNG; png decodes and writes "
+                        "every one as PNG (default processing.zed_images)")
     p.add_argument("--recover", action="store_true",
                    help="salvage a truncated MCAP into NAME.recovered.mcap beside it (the original is kept)")
     add_rig_options(p)
@@ -82,7 +86,8 @@ _OPTIONS = (("--rate", "rate", None), ("--workers", "workers", None), ("--engine
             ("--scheduler", "scheduler", None), ("--calibration", "calibration", None), ("--topics", "topics", None),
             ("--depth", "depth", "auto"), ("--tolerance-ms", "tolerance_ms", None), ("--ffc-margin", "ffc_margin", None),
             ("--keep-ffc", "keep_ffc", False), ("--chunk-size", "chunk_size", 8), ("--paper", "paper", False),
-            ("--png-level", "png_level", None), ("--recover", "recover", False), ("--rig", "rig", None))
+            ("--png-level", "png_level", None), ("--zed-images", "zed_images", None), ("--recover", "recover", False),
+            ("--rig", "rig", None))
 
 
 def command_line(args: argparse.Namespace) -> list[str]:
@@ -138,7 +143,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     extra = {"rate_hz": PAPER_RATE_HZ, "outputs": PAPER_OUTPUTS} if args.paper else {"rate_hz": args.rate}
     params = Params.from_rig(rig, tolerance_ms=args.tolerance_ms, ffc_margin=args.ffc_margin,
                              keep_ffc=args.keep_ffc, chunk_size=args.chunk_size, depth=args.depth,
-                             png_compression_level=("rig" if args.png_level is None else args.png_level), **extra)
+                             png_compression_level=("rig" if args.png_level is None else args.png_level),
+                             zed_images=args.zed_images or "rig", **extra)
     previous = signal.signal(signal.SIGTERM, _terminated)
     try:
         summary = export(args.recordings, args.out, rig, params, calibration=args.calibration, engine=args.engine,

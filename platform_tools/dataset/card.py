@@ -42,12 +42,14 @@ def _table(head: list[str], body: list[list]) -> list[str]:
 
 
 def files_by_kind(rows: list[dict]) -> dict[str, int]:
-    """Image files the index lists, per kind (the column name less ``_png``)."""
+    """Image files the index lists, per kind (the column name less ``_png`` or ``_jpg``, chunk.FILE_COLUMNS)."""
+    from .chunk import FILE_COLUMNS
     out: dict[str, int] = {}
     for r in rows:
         for k, v in r.items():
-            if k.endswith("_png") and v:
-                out[k[:-4]] = out.get(k[:-4], 0) + 1
+            if k.endswith(FILE_COLUMNS) and v:
+                kind = k[:-len("_png")]
+                out[kind] = out.get(kind, 0) + 1
     return out
 
 
@@ -127,7 +129,10 @@ def render(manifest: dict, rows: list[dict], command: list[str] | None) -> str:
               f"{p['min_coverage']:g} of a fully covered pixel's weight; no colour where there was no depth.",
               "- PNG: " + ("the export's own writer (ISA-L deflate level 1, UP filter)"
                            if p.get("png_compression_level") is None
-                           else f"OpenCV's libpng, zlib level {p['png_compression_level']}") + ".", ""]
+                           else f"OpenCV's libpng, zlib level {p['png_compression_level']}") + ".",
+              "- ZED images: " + ("decoded and written as PNG" if p.get("zed_images") == "png" else
+                                  "as recorded: a compressed topic's JPEG byte for byte (`*_jpg` columns), a raw "
+                                  "topic as PNG") + ".", ""]
     return "\n".join(lines)
 
 

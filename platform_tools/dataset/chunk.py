@@ -15,7 +15,7 @@ import numpy as np
 
 from . import encode, thermal8
 from .calib import FRAME_OF, model_from_dict, rt_a_b
-from .decode import IMAGE_STREAMS, iter_frames
+from .decode import IMAGE_STREAMS, Encoded, iter_frames
 from .recording import THERMAL, RecordingError
 from .workers import keep_freed_memory
 
@@ -44,6 +44,14 @@ def _registrar(task: dict, side: str):
 _stereo: dict = {}
 
 
+def _pixels(got: dict, stream: str) -> np.ndarray:
+    """The image of ``stream`` in one sample's ``got`` (stream -> image or decode.Encoded), decoded once."""
+    img = got[stream]
+    if isinstance(img, Encoded):
+        img = got[stream] = img.image()
+    return img
+
+
 def _depth(task: dict, got: dict) -> np.ndarray:
     """The ZED left depth of one sample: recorded, or computed from the stereo pair (stereo.py)."""
     if task["depth"] == "recorded":
@@ -54,13 +62,19 @@ def _depth(task: dict, got: dict) -> np.ndarray:
         _stereo[key] = StereoCalibration(model_from_dict(task["cams"]["zed_x_left_optical"]),
                                          model_from_dict(task["cams"]["zed_x_right_optical"]),
                                          f"{task['recording']}: the ZED pair")
-    return compute(task["depth"], got["zed_left"], got["zed_right"], _stereo[key])
+    return compute(task["depth"], _pixels(got, "zed_left"), _pixels(got, "zed_right"), _stereo[key])
 
 
 #: every image kind an export can write (Params.outputs chooses among them)
 KINDS = ("zed_left", "zed_right", "raw16", "8bit", "rgb_registered", "mask", "depth_mm")
 #: the kinds written per thermal camera, in <recording>/<camera>/<kind>/ with index column <camera>_<kind>_png
 THERMAL_KINDS = ("raw16", "8bit", "rgb_registered", "mask", "depth_mm")
+#: processing.zed_images: "as_recorded" writes a compressed ZED topic's image file (JPEG, or PNG) as the recording
+#: holds it, byte for byte, in <recording>/zed_left/NNNNNN.jpg with index column zed_left_jpg (a raw topic: PNG,
+#: zed_left_png); "png" decodes every ZED image and writes it as PNG (column zed_left_png)
+ZED_IMAGES = ("as_recorded", "png")
+#: how the index's columns that name a written file end
+FILE_COLUMNS = ("_png", "_jpg")
 #: a writer's temporary file: ``.<name>.<pid>.tmp`` beside the image it becomes (engines remove a stopped
 #: worker's by its pid; a resumed export removes any left by a killed one)
 TMP_SUFFIX = ".tmp"
@@ -88,6 +102,11 @@ def _write_png(path: Path, img: np.ndarray, level: int | None) -> None:
         data = png_bytes(img, level)
     except encode.EncodeError as exc:
         raise OSError(f"{path}: {exc}") from None
+    _write_file(path, data)
+
+
+def _write_file(path: Path, data: bytes) -> None:
+    """``data`` in the file ``path``, whole or not at all (a temporary file renamed)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = tmp_name(path, os.getpid())
     try:
@@ -98,17 +117,20 @@ def _write_png(path: Path, img: np.ndarray, level: int | None) -> None:
         raise
 
 
-def _read(task: dict) -> dict[int, dict[str, np.ndarray]]:
-    """The decoded images of the chunk's samples: sample position -> stream -> image. Only the MCAP chunks around
-    each sample's messages are read, each once (decode.windows)."""
+def _read(task: dict) -> dict[int, dict[str, np.ndarray | Encoded]]:
+    """The decoded images of the chunk's samples: sample position -> stream -> image, or the decode.Encoded file
+    of a compressed ZED image written as recorded (ZED_IMAGES). Only the MCAP chunks around each sample's messages
+    are read, each once (decode.windows)."""
     wanted, logs = {}, []
     for pi, pair in enumerate(task["pairs"]):
         for s, fr in pair["frames"].items():
             wanted[(task["topics"][s], fr["stamp_ns"])] = (pi, s)
             logs.append(fr["log_ns"])
     files = sorted({task["files"][fr["file"]] for p in task["pairs"] for fr in p["frames"].values()})
-    images: dict[int, dict[str, np.ndarray]] = {}
-    for (pi, s), _, img in iter_frames(files, wanted, logs):
+    as_recorded = task["params"].get("zed_images", "as_recorded") == "as_recorded"
+    keep = frozenset(task["topics"][s] for s in ("zed_left", "zed_right") if as_recorded and s in task["topics"])
+    images: dict[int, dict[str, np.ndarray | Encoded]] = {}
+    for (pi, s), _, img in iter_frames(files, wanted, logs, keep_encoded=keep):
         images.setdefault(pi, {})[s] = img
     return images
 
@@ -153,11 +175,17 @@ def process_chunk(task: dict) -> list[dict]:
                 row[f"t_{s}_ns"] = pair["frames"][s]["stamp_ns"]
         for s, r in pair["residual_ms"].items():
             row[f"residual_{s}_ms"] = round(r, 4)
-        zed = got["zed_left"]
         for s in ("zed_left", "zed_right"):
             if s in kinds:
-                _write_png(rec_dir / s / name, got[s], png)
-                row[f"{s}_png"] = f"{rec}/{s}/{name}"
+                img = got[s]
+                if isinstance(img, Encoded):
+                    file = f"{pair['sample']:06d}{img.suffix}"
+                    _write_file(rec_dir / s / file, img.data)
+                else:
+                    file = name
+                    _write_png(rec_dir / s / name, img, png)
+                row[f"{s}_{Path(file).suffix[1:]}"] = f"{rec}/{s}/{file}"
+        zed = _pixels(got, "zed_left")
         depth = _depth(task, got)
         row["depth_source"] = task["depth"]
         for cam in THERMAL:

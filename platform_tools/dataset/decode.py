@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import bisect
 import itertools
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -18,6 +19,33 @@ IMAGE_STREAMS = ("zed_left", "zed_right", "zed_depth", "thermal_left", "thermal_
 #: ROS image encoding -> (numpy dtype, channels)
 ENCODINGS = {"mono16": (np.uint16, 1), "16UC1": (np.uint16, 1), "32FC1": (np.float32, 1), "mono8": (np.uint8, 1),
              "8UC1": (np.uint8, 1), "bgr8": (np.uint8, 3), "rgb8": (np.uint8, 3), "bgra8": (np.uint8, 4)}
+
+
+#: the first bytes of the image files a CompressedImage may hold that the export writes as they are -> their suffix
+MAGIC_SUFFIX = {b"\xff\xd8\xff": ".jpg", b"\x89PNG\r\n\x1a\n": ".png"}
+
+
+@dataclass(frozen=True)
+class Encoded:
+    """A CompressedImage's image file as the recording holds it (a JPEG or a PNG, ``suffix``), and its format
+    string (``jpeg``, ``bgr8; jpeg compressed bgr8``...)."""
+    data: bytes
+    format: str
+    suffix: str
+
+    def image(self) -> np.ndarray:
+        """The decoded image, as :func:`decode_cdr` gives it."""
+        return _compressed(self.data, self.format)
+
+
+def encoded(data, fmt: str) -> Encoded | None:
+    """The :class:`Encoded` of a CompressedImage's ``data`` (bytes or a memoryview) in format ``fmt``; None when
+    it is not a file MAGIC_SUFFIX knows (compressedDepth's header, another codec)."""
+    head = bytes(data[:8])
+    for magic, suffix in MAGIC_SUFFIX.items():
+        if head.startswith(magic):
+            return Encoded(bytes(data), fmt, suffix)
+    return None
 
 
 def _compressed(buf, fmt: str) -> np.ndarray:
@@ -90,18 +118,19 @@ def windows(log_ns, spans) -> list[tuple[int, int]]:
     return [(a, b) for a, b in out]
 
 
-def iter_frames(files: list[str], wanted: dict[tuple[str, int], object], log_ns):
+def iter_frames(files: list[str], wanted: dict[tuple[str, int], object], log_ns, keep_encoded=frozenset()):
     """Decode the wanted (topic, header stamp) messages, logged at the given log times, of the given files; only the
     MCAP chunks holding one of those log times are decompressed, each once (:func:`windows`), and the images are
     decoded from the chunk's bytes where they lie (:mod:`.mcapscan`, :func:`decode_cdr`); a file without a chunk
-    index goes through mcap's reader."""
+    index goes through mcap's reader. A CompressedImage of a topic in ``keep_encoded`` comes as its
+    :class:`Encoded` file, not decoded (when :func:`encoded` knows it)."""
     topics = sorted({t for t, _ in wanted})
     for f in files:
         with open(f, "rb") as fh:
             reader = mcap_reader(fh, f)
             summary = reader.get_summary()
             if not mcapscan.has_chunk_index(summary):
-                yield from _iter_frames_mcap(reader, f, topics, wanted, log_ns)
+                yield from _iter_frames_mcap(reader, f, topics, wanted, log_ns, keep_encoded)
                 continue
             spans = [(c.message_start_time, c.message_end_time) for c in summary.chunk_indexes]
             wins = windows(log_ns, spans)
@@ -116,8 +145,12 @@ def iter_frames(files: list[str], wanted: dict[tuple[str, int], object], log_ns)
                     continue
                 key = (ids[cid], header_stamp(data))
                 if key in wanted:
-                    channel = summary.channels[cid]
-                    yield wanted[key], key[1], decode_cdr(summary.schemas[channel.schema_id].name, data)
+                    schema = summary.schemas[summary.channels[cid].schema_id].name
+                    enc = None
+                    if key[0] in keep_encoded and schema.endswith("CompressedImage"):
+                        fmt, offset, n = compressed_fields(data)
+                        enc = encoded(data[offset:offset + n], fmt)
+                    yield wanted[key], key[1], enc or decode_cdr(schema, data)
 
 
 def _overlaps(wins, starts, a: int, b: int) -> bool:
@@ -126,7 +159,7 @@ def _overlaps(wins, starts, a: int, b: int) -> bool:
     return i >= 0 and wins[i][1] >= a
 
 
-def _iter_frames_mcap(reader, f, topics, wanted, log_ns):
+def _iter_frames_mcap(reader, f, topics, wanted, log_ns, keep_encoded=frozenset()):
     """:func:`iter_frames` of one file through mcap's reader and mcap_ros2's decoder (no chunk index)."""
     from mcap_ros2.decoder import DecoderFactory
     factory, decoders = DecoderFactory(), {}
@@ -146,7 +179,10 @@ def _iter_frames_mcap(reader, f, topics, wanted, log_ns):
             dec = decoders.get((f, schema.id))
             if dec is None:
                 dec = decoders[(f, schema.id)] = factory.decoder_for("cdr", schema)
-            yield wanted[key], key[1], decode_image(schema.name, dec(msg.data))
+            decoded = dec(msg.data)
+            enc = (encoded(bytes(decoded.data), decoded.format)
+                   if channel.topic in keep_encoded and schema.name.endswith("CompressedImage") else None)
+            yield wanted[key], key[1], enc or decode_image(schema.name, decoded)
 
 
 def probe_sizes(rec: Recording) -> dict[str, tuple[int, int]]:

@@ -5,8 +5,8 @@ Layout of ``OUT``::
     export.json                      what this export is (inputs, parameters, calibration) and its status
     index.csv, index.parquet         one row per sample (written when every chunk is done)
     README.md                        the dataset card (:mod:`.card`), written with the index
-    <recording>/zed_left/NNNNNN.png          RGB as recorded (8-bit BGR PNG)
-    <recording>/zed_right/NNNNNN.png
+    <recording>/zed_left/NNNNNN.jpg          RGB as recorded: a compressed topic's JPEG, byte for byte (a raw
+    <recording>/zed_right/NNNNNN.jpg          topic, or processing.zed_images png: NNNNNN.png, 8-bit BGR PNG)
     <recording>/thermal_left/raw16/NNNNNN.png        the 16-bit original
     <recording>/thermal_left/8bit/NNNNNN.png         the paper's 8-bit image
     <recording>/thermal_left/rgb_registered/NNNNNN.png   ZED RGB registered into this view
@@ -44,7 +44,7 @@ from typing import Callable
 from platform_tools.rig import atomic
 from . import card, thermal8
 from .calib import CalibrationError, at_recorded_size, for_recording, load_calibration, model_to_dict, zed_right
-from .chunk import KINDS, TMP_SUFFIX, process_chunk, warm_up
+from .chunk import FILE_COLUMNS, KINDS, TMP_SUFFIX, process_chunk, warm_up
 from .decode import IMAGE_STREAMS, probe_sizes
 from .engines import ENGINES, EngineError, start_method, started, stdlib_distutils
 from .pairing import plan
@@ -77,10 +77,13 @@ class Params:
     outputs: tuple = KINDS
     #: zlib level of the PNGs, 0..9; None: OpenCV's fast default (processing.png_compression_level)
     png_compression_level: int | None = None
+    #: "as_recorded": a compressed ZED image's own bytes (chunk.ZED_IMAGES); "png" (processing.zed_images)
+    zed_images: str = "as_recorded"
 
     @classmethod
     def from_rig(cls, rig, *, rate_hz=None, tolerance_ms=None, ffc_margin=None, keep_ffc=False,
-                 min_coverage=0.5, chunk_size=8, depth="auto", outputs=KINDS, png_compression_level="rig") -> "Params":
+                 min_coverage=0.5, chunk_size=8, depth="auto", outputs=KINDS, png_compression_level="rig",
+                 zed_images="rig") -> "Params":
         p = rig.desc.processing
         level = p.png_compression_level if png_compression_level == "rig" else png_compression_level
         return cls(float(rate_hz if rate_hz is not None else p.pair_rate_hz),
@@ -88,7 +91,7 @@ class Params:
                    int(ffc_margin if ffc_margin is not None else p.ffc_margin_frames), bool(keep_ffc),
                    float(p.zbuffer_tolerance_percent), float(min_coverage), int(chunk_size),
                    asdict(thermal8.Params.from_rig(rig)), str(depth), tuple(outputs),
-                   None if level is None else int(level))
+                   None if level is None else int(level), str(p.zed_images if zed_images == "rig" else zed_images))
 
 
 #: what the paper releases per sample (docs/dataset.md "The paper's dataset"): per thermal camera its 8-bit image,
@@ -124,11 +127,11 @@ def _chunk_complete(out: Path, marker: Path) -> bool:
         rows = json.loads(marker.read_text())
     except (OSError, json.JSONDecodeError):
         return False
-    return all((out / v).is_file() for r in rows for k, v in r.items() if k.endswith("_png"))
+    return all((out / v).is_file() for r in rows for k, v in r.items() if k.endswith(FILE_COLUMNS) and v)
 
 
-#: a chunk writer's temporary image (chunk.tmp_name): ``.NNNNNN.png.PID.tmp``
-_PARTIAL = re.compile(r"^\.\d{6}\.png\.\d+" + re.escape(TMP_SUFFIX) + "$")
+#: a chunk writer's temporary image (chunk.tmp_name): ``.NNNNNN.png.PID.tmp`` or ``.NNNNNN.jpg.PID.tmp``
+_PARTIAL = re.compile(r"^\.\d{6}\.(png|jpg)\.\d+" + re.escape(TMP_SUFFIX) + "$")
 #: the files export writes itself with platform_tools.rig.atomic, whose temporary files are ``.NAME.XXXXXXXX.tmp``
 _OWN = (MANIFEST, "index.csv", "index.parquet", card.CARD)
 

@@ -415,6 +415,9 @@ class Processing:
     #: writer (platform_tools/dataset/encode.py: ISA-L deflate level 1, UP filter; about 3x faster than OpenCV's
     #: default and 10 % smaller, the same pixels; docs/dataset.md "Speed")
     png_compression_level: Optional[Annotated[int, Ge(0), Le(9)]] = None
+    #: the export's ZED images: "as_recorded" writes a compressed topic's JPEG (or PNG) as the recording holds it,
+    #: byte for byte (a raw topic as PNG), "png" decodes every one and writes it as PNG (docs/dataset.md "Speed")
+    zed_images: Literal["as_recorded", "png"] = "as_recorded"
 
 
 # ----------------------------------------------------------------------------- on-device stack (issue 8)

@@ -76,9 +76,14 @@ def test_a_resumed_export_removes_only_a_writers_temporary_files(tmp_path):
     rec.mkdir(parents=True)
     partial = tmp_name(rec / "000003.png", 4242)
     partial.write_bytes(b"half")
-    kept = [rec / "000003.png", rec / "notes.tmp", rec / ".000003.png.tmp", tmp_path / "other" / ".000001.png.7.tmp"]
+    zed = tmp_path / "rec" / "zed_left"
+    zed.mkdir()
+    jpeg = tmp_name(zed / "000003.jpg", 4243)          # a recorded JPEG being written (zed_images as_recorded)
+    jpeg.write_bytes(b"half")
+    kept = [rec / "000003.png", rec / "notes.tmp", rec / ".000003.png.tmp", tmp_path / "other" / ".000001.png.7.tmp",
+            zed / ".000003.gif.4243.tmp"]
     for k in kept:
         k.parent.mkdir(parents=True, exist_ok=True)
         k.write_bytes(b"mine")
-    assert remove_partial(tmp_path, ["rec"]) == [partial]
-    assert not partial.exists() and all(k.read_bytes() == b"mine" for k in kept)
+    assert sorted(remove_partial(tmp_path, ["rec"])) == sorted([partial, jpeg])
+    assert not partial.exists() and not jpeg.exists() and all(k.read_bytes() == b"mine" for k in kept)

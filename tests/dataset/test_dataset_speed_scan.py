@@ -159,6 +159,21 @@ def test_a_rosbags_recording_indexes_and_decodes_as_through_mcaps_reader(bag, ri
     assert len(got) == len(wanted) == len(ref_imgs)
     for k in wanted.values():
         np.testing.assert_array_equal(got[k], ref_imgs[k])
+    # the ZED images kept as their recorded files (export's zed_images as_recorded): the same through both paths
+    keep = frozenset(rec.streams[s].topic for s in ("zed_left", "zed_right"))
+    enc = {k: e for k, _, e in decode.iter_frames([str(f)], wanted, logs, keep_encoded=keep)}
+    with open(f, "rb") as fh:
+        ref_enc = {k: e for k, _, e in decode._iter_frames_mcap(
+            recording.mcap_reader(fh, f), str(f), sorted({t for t, _ in wanted}), wanted, logs, keep)}
+    assert set(enc) == set(ref_enc) == set(wanted.values())
+    zed = [k for k in wanted.values() if k[0] in ("zed_left", "zed_right")]
+    assert zed and all(isinstance(enc[k], decode.Encoded) and enc[k].suffix == ".jpg" for k in zed)
+    for k in wanted.values():
+        if k in zed:
+            assert enc[k] == ref_enc[k]
+            np.testing.assert_array_equal(enc[k].image(), got[k])
+        else:
+            np.testing.assert_array_equal(enc[k], got[k])
 
 
 @pytest.mark.slow
