@@ -45,19 +45,11 @@ def _frames(rec, stream: str, index: np.ndarray):
             yield k, stamp, img
 
 
-def select_frames(bag: Path, topic: str, board, target: str, rig, stage: Path,
-                  max_frames: int = MAX_FRAMES) -> dict:
-    """Write the chosen frames of ``topic`` into ``stage`` as <stamp_ns>.png; returns what was chosen and
-    why the others were left out (frames.json)."""
-    from calibration.detect.targets import detect_target
-    from calibration.frames import board_sharpness, coverage_greedy, ffc_mask, frozen_mask, sharp_mask
-    from platform_tools.dataset.recording import RecordingError, open_recording
+def ffc_or_frozen(rec, stream: str) -> tuple[np.ndarray, list, tuple[int, int] | None]:
+    """(bool (n,): each frame of ``stream`` in an FFC (the recording's status or telemetry, ffc_periods, with
+    calibration.frames' margin) or frozen on its decoded pixels, the FFC spans, the image (width, height))."""
+    from calibration.frames import ffc_mask, frozen_mask
     from platform_tools.dataset.sync import ffc_periods
-    try:
-        rec = open_recording(Path(bag), rig)
-    except RecordingError as exc:
-        raise UserError(f"--bag {exc}") from None
-    stream = _stream_of(rec, topic)
     st = rec.streams[stream]
     n = len(st.stamp_ns)
     frozen, size = np.zeros(n, bool), None
@@ -67,7 +59,24 @@ def select_frames(bag: Path, topic: str, board, target: str, rig, stage: Path,
         prev, size = img, (img.shape[1], img.shape[0])
     period = float(np.median(np.diff(np.sort(st.stamp_ns)))) if n > 1 else 1e9 / 30
     spans = ffc_periods(rec, stream, period)
-    in_ffc = ffc_mask(st.stamp_ns, [(p["start_ns"], p["end_ns"]) for p in spans]) | frozen
+    return ffc_mask(st.stamp_ns, [(p["start_ns"], p["end_ns"]) for p in spans]) | frozen, spans, size
+
+
+def select_frames(bag: Path, topic: str, board, target: str, rig, stage: Path,
+                  max_frames: int = MAX_FRAMES) -> dict:
+    """Write the chosen frames of ``topic`` into ``stage`` as <stamp_ns>.png; returns what was chosen and
+    why the others were left out (frames.json)."""
+    from calibration.detect.targets import detect_target
+    from calibration.frames import board_sharpness, coverage_greedy, sharp_mask
+    from platform_tools.dataset.recording import RecordingError, open_recording
+    try:
+        rec = open_recording(Path(bag), rig)
+    except RecordingError as exc:
+        raise UserError(f"--bag {exc}") from None
+    stream = _stream_of(rec, topic)
+    st = rec.streams[stream]
+    n = len(st.stamp_ns)
+    in_ffc, spans, size = ffc_or_frozen(rec, stream)
     cand = np.flatnonzero(~in_ffc)
     if len(cand) > MAX_CANDIDATES:
         cand = cand[np.linspace(0, len(cand) - 1, MAX_CANDIDATES).round().astype(int)]

@@ -5,6 +5,7 @@ files, mrcal's rectification (models and maps) and the epipolar error (docs/cali
 from __future__ import annotations
 
 import argparse
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -45,11 +46,18 @@ def register(sub: argparse._SubParsersAction) -> None:
                "lens models, an image of another size than its model, fewer than --min-views shared views, "
                "a --left-fisheye / --right-fisheye that is not an OpenCV fisheye camera of the model's size, "
                "a camera's views that --board cannot be the board of: grids larger than it, or labels placed "
-               "by opposite board edges with no view showing both).")
+               "by opposite board edges with no view showing both; a --bag without the ZED left images or \n"
+               "whose trigger assignment is ambiguous; 1 also: no pair of the --bag shows the board to both).")
     p.add_argument("--left", required=True, type=Path, metavar="L.cameramodel", help="the left camera's mono model")
     p.add_argument("--right", required=True, type=Path, metavar="R.cameramodel", help="the right camera's mono model")
-    p.add_argument("--images", required=True, type=Path, metavar="DIR",
-                   help="folder with left/ and right/ (or thermal_left/ and thermal_right/), paired by name")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--images", type=Path, metavar="DIR",
+                     help="folder with left/ and right/ (or thermal_left/ and thermal_right/), paired by name")
+    src.add_argument("--bag", type=Path, metavar="REC",
+                     help="a recording instead: the two Bosons' frames paired by the trigger that exposed them (as "
+                          "export pairs them, never by the nearest stamps), neither in an FFC, the board found in "
+                          "both, sharp, covering the image; stereo.json says which (the recording needs the ZED left "
+                          "images: the triggers are numbered on its clock)")
     p.add_argument("--board", required=True, metavar="WxH", help="inner corners across x down, e.g. 10x7")
     p.add_argument("--square", required=True, type=float, metavar="METRES", help="square size in metres")
     p.add_argument("--target", default="checkerboard", choices=TARGET_KINDS, help="the board (as calibrate thermal)")
@@ -192,11 +200,20 @@ def cmd_thermal_stereo(args: argparse.Namespace) -> int:
     left, right = read_model(args.left, "--left"), read_model(args.right, "--right")
     check_models(left, right, (args.left, args.right))
     fisheye = fisheye_lenses(args, (left, right))
-    try:
-        pairs = find_pairs(args.images)
-    except StereoInputError as exc:
-        raise UserError(f"{exc}; nothing written") from None
-    obs = detect_pairs(pairs, board, args.square, args.target, (left.imagersize(), right.imagersize()), args.quiet)
+    with tempfile.TemporaryDirectory(prefix="thermal-stereo-") as tmp:
+        frames = None
+        images = args.images
+        if args.bag is not None:
+            from calibration.commands.stereo_frames import select_pairs
+            images = Path(tmp)
+            frames = select_pairs(args.bag, board, args.target, rig, images)
+        try:
+            pairs = find_pairs(images)
+        except StereoInputError as exc:
+            raise UserError(f"{exc}; nothing written") from None
+        obs = detect_pairs(pairs, board, args.square, args.target, (left.imagersize(), right.imagersize()),
+                           args.quiet)
+    where = args.bag if args.bag is not None else args.images
 
     tree = frames_or_user_error(rig)
     T_seed = tree.T(CAMERAS["thermal_left"], CAMERAS["thermal_right"])       # right optical frame in the left
@@ -206,7 +223,7 @@ def cmd_thermal_stereo(args: argparse.Namespace) -> int:
         sol = solve_pair(obs, lenses, rt_seed, refine_intrinsics=args.refine_intrinsics, min_views=min_views,
                          verbose=args.verbose > 0)
     except StereoSolveError as exc:
-        raise UserError(f"{args.images}: {exc}; nothing written") from None
+        raise UserError(f"{where}: {exc}; nothing written") from None
 
     shared = obs.subset(obs.shared())
     correction = None
@@ -234,7 +251,7 @@ def cmd_thermal_stereo(args: argparse.Namespace) -> int:
     report = {
         "convention": "T_left_right: the right optical frame in the left one (mm); rt_right_left: mrcal rt "
                       "(left -> right, metres), the right model's extrinsics_rt_fromref",
-        "images": str(args.images), "left_model": str(args.left), "right_model": str(args.right),
+        "images": None if args.images is None else str(args.images), "bag_frames": frames, "left_model": str(args.left), "right_model": str(args.right),
         "board": {"width": board[0], "height": board[1], "square_m": args.square, "target": args.target},
         "pairs": obs.n, "shared_views": sol.n_views,
         "not_shared": [n for n, s in zip(obs.names, obs.shared()) if not s],

@@ -85,6 +85,8 @@ class Spec:
     #: the telemetry line delivered with the bytes of every 16-bit word swapped (a layout this reader assumes wrongly)
     telemetry_word_swapped: bool = False
     seed: int = 0
+    #: camera -> function of the trigger number giving that frame's uint16 image (default: noise of THERMAL_SIZE)
+    thermal_px: dict = field(default_factory=dict)
 
 
 def _stepped(true_ns: np.ndarray, steps, clock: str, period_ns: float = PERIOD_NS) -> np.ndarray:
@@ -199,7 +201,8 @@ def write(path: Path, spec: Spec, topics: dict[str, str], storage: str = "mcap",
             if in_ffc and frozen_px is not None:
                 px = frozen_px
             else:
-                px = (20000 + rng.normal(0, 300, (THERMAL_SIZE[1], THERMAL_SIZE[0]))).astype(np.uint16)
+                px = (spec.thermal_px[cam](int(k)) if cam in spec.thermal_px else
+                      (20000 + rng.normal(0, 300, (THERMAL_SIZE[1], THERMAL_SIZE[0]))).astype(np.uint16))
                 frozen_px = px
             log = int(t) + TRANSPORT_NS
             if spec.telemetry:     # the rows below the image: the line's bytes as the frame buffer holds them
