@@ -66,7 +66,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "null there: the export's own writer, ISA-L deflate level 1 with the UP filter, about 3x "
                         "faster than libpng's level 1, the same pixels); 6 is several times slower and smaller "
                         "(docs/dataset.md)")
-    p.add_argument("--zed-images", choices=("as_recorded", "png"), default=None,
+    p.add_argument("--zed-images", choices=("as_recorded", "png"), default=None,     # chunk.ZED_IMAGES
                    help="the ZED images: as_recorded writes a compressed topic's JPEG as the recording holds it, byte "
                         "for byte (smaller, faster, no second encoding), a raw topic as PNG; png decodes and writes "
                         "every one as PNG (default processing.zed_images)")

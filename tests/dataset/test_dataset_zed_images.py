@@ -61,9 +61,15 @@ def exported(bags, rig, tmp_path_factory):
     return out
 
 
-def test_the_default_is_as_recorded(rig):
+def test_the_default_is_as_recorded_and_the_rig_key_takes_what_the_writer_knows(rig):
+    import typing
+
+    from platform_tools.dataset.chunk import ZED_IMAGES
+    from platform_tools.rig.schema import Processing
     assert rig.desc.processing.zed_images == "as_recorded"
     assert Params.from_rig(rig).zed_images == "as_recorded"
+    hint = typing.get_type_hints(Processing)["zed_images"]
+    assert typing.get_args(hint) == ZED_IMAGES
 
 
 def test_a_compressed_zed_image_is_the_recorded_jpeg_byte_for_byte(exported, bags, rig):
