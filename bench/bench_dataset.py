@@ -134,7 +134,8 @@ def compare_outputs(a: Path, b: Path) -> dict:
     the PNG."""
     fa = {p.relative_to(a) for p in a.rglob("*") if p.is_file()}
     fb = {p.relative_to(b) for p in b.rglob("*") if p.is_file()}
-    as_jpeg = {rel: rel.with_suffix(".jpg") for rel in fa - fb if rel.suffix == ".png" and rel.with_suffix(".jpg") in fb}
+    as_jpeg = {rel: rel.with_suffix(".jpg") for rel in fa - fb
+               if rel.suffix == ".png" and rel.with_suffix(".jpg") in fb}
     res = {"files": len(fa), "only_in_previous": sorted(map(str, fa - fb - set(as_jpeg))),
            "only_in_new": sorted(map(str, fb - fa - set(as_jpeg.values()))),
            "identical_bytes": 0, "same_pixels": [], "same_pixels_as_jpeg": [], "different": []}
@@ -147,7 +148,8 @@ def compare_outputs(a: Path, b: Path) -> dict:
         else:
             res["different"].append(str(rel))
     for rel, jpg in sorted(as_jpeg.items()):
-        same = np.array_equal(cv2.imread(str(a / rel), cv2.IMREAD_UNCHANGED), cv2.imread(str(b / jpg), cv2.IMREAD_COLOR))
+        same = np.array_equal(cv2.imread(str(a / rel), cv2.IMREAD_UNCHANGED),
+                              cv2.imread(str(b / jpg), cv2.IMREAD_COLOR))
         res["same_pixels_as_jpeg" if same else "different"].append(str(jpg))
     return res
 

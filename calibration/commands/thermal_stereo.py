@@ -46,7 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                "lens models, an image of another size than its model, fewer than --min-views shared views, "
                "a --left-fisheye / --right-fisheye that is not an OpenCV fisheye camera of the model's size, "
                "a camera's views that --board cannot be the board of: grids larger than it, or labels placed "
-               "by opposite board edges with no view showing both; a --bag without the ZED left images or \n"
+               "by opposite board edges with no view showing both; a --bag without the ZED left images or "
                "whose trigger assignment is ambiguous; 1 also: no pair of the --bag shows the board to both).")
     p.add_argument("--left", required=True, type=Path, metavar="L.cameramodel", help="the left camera's mono model")
     p.add_argument("--right", required=True, type=Path, metavar="R.cameramodel", help="the right camera's mono model")
@@ -251,7 +251,8 @@ def cmd_thermal_stereo(args: argparse.Namespace) -> int:
     report = {
         "convention": "T_left_right: the right optical frame in the left one (mm); rt_right_left: mrcal rt "
                       "(left -> right, metres), the right model's extrinsics_rt_fromref",
-        "images": None if args.images is None else str(args.images), "bag_frames": frames, "left_model": str(args.left), "right_model": str(args.right),
+        "images": None if args.images is None else str(args.images), "bag_frames": frames,
+        "left_model": str(args.left), "right_model": str(args.right),
         "board": {"width": board[0], "height": board[1], "square_m": args.square, "target": args.target},
         "pairs": obs.n, "shared_views": sol.n_views,
         "not_shared": [n for n, s in zip(obs.names, obs.shared()) if not s],
