@@ -1,0 +1,43 @@
+"""bench/bench_dataset.py's comparison of two exports' files: a previous tree's PNG of a ZED image and this tree's
+JPEG written as recorded are the same image when the JPEG, decoded as OpenCV decodes it, has the PNG's pixels."""
+from __future__ import annotations
+
+import importlib.util
+import os
+
+import cv2
+import numpy as np
+
+from tests.conftest import REPO
+
+
+def _bench():
+    """The bench module, imported with this process's environment left as it was (the bench pins thread counts)."""
+    saved = dict(os.environ)
+    try:
+        spec = importlib.util.spec_from_file_location("bench_dataset_under_test", REPO / "bench" / "bench_dataset.py")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        return mod
+    finally:
+        os.environ.clear()
+        os.environ.update(saved)
+
+
+def test_a_png_and_the_jpeg_it_was_decoded_from_compare_by_pixels(tmp_path):
+    rng = np.random.default_rng(3)
+    img = cv2.GaussianBlur(rng.integers(0, 255, (40, 48, 3), dtype=np.uint8), (5, 5), 2)
+    jpeg = cv2.imencode(".jpg", img)[1].tobytes()
+    decoded = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
+    old, new = tmp_path / "old" / "rec" / "zed_left", tmp_path / "new" / "rec" / "zed_left"
+    old.mkdir(parents=True)
+    new.mkdir(parents=True)
+    cv2.imwrite(str(old / "000000.png"), decoded)              # what the previous tree wrote
+    (new / "000000.jpg").write_bytes(jpeg)                      # what this tree writes
+    cv2.imwrite(str(old / "000001.png"), img)                   # not the JPEG's pixels: different
+    (new / "000001.jpg").write_bytes(jpeg)
+    (old / "000002.png").write_bytes((old / "000000.png").read_bytes())     # no JPEG beside it: only in previous
+    got = _bench().compare_outputs(tmp_path / "old", tmp_path / "new")
+    assert got["same_pixels_as_jpeg"] == ["rec/zed_left/000000.jpg"]
+    assert got["different"] == ["rec/zed_left/000001.jpg"]
+    assert got["only_in_previous"] == ["rec/zed_left/000002.png"] and got["only_in_new"] == []
