@@ -83,65 +83,38 @@ def _died(exc: Exception) -> EngineError:
 
 
 class Pool:
-    """A process pool of workers that end with this process (workers.die_with_parent), started at once:
-    :meth:`map` runs calls (the index's chunk scans), :meth:`run` tasks, which find the workers warm: ``warm_up``
-    (imports, numba's kernels loaded; no OpenCV call) has run in each spawned worker as it started, or (``method``
-    "fork", :func:`start_method`) once here. Forked, the pool starts its workers cold; the first :meth:`map` runs the
-    warm-up here while they scan (numba's start-up, about 0.5 s, no longer idles one core before the index), and
-    the first :meth:`run` ends the cold workers and forks warm ones from this process (a fork takes milliseconds).
-    :meth:`close` ends the workers."""
+    """A process pool of workers that end with this process (workers.die_with_parent), started at once and warm:
+    ``warm_up`` (imports, numba's kernels loaded; no OpenCV call) runs in each spawned worker as it starts, or
+    (``method`` "fork", :func:`start_method`) once here, the workers forked after it. :meth:`map` runs calls (the
+    index's chunk scans), :meth:`run` tasks; :meth:`close` ends the workers."""
 
     def __init__(self, workers: int, warm_up=None, method: str | None = None):
         import multiprocessing
+        import os
+        from concurrent.futures import ProcessPoolExecutor
         method = method or start_method()
         self.method = method                #: "spawn" or "fork", as the workers were started
         self.workers = workers              #: how many workers run
-        self._ctx = multiprocessing.get_context(method)
+        ctx = multiprocessing.get_context(method)
         self._before = set(multiprocessing.active_children())
         forked = method == "fork"
         self._closed = False
-        #: the warm-up still to run here before warm workers are forked (forked pools only)
-        self._warm_up = warm_up if forked else None
-        #: whether the workers now running were forked before the warm-up (ended by the first run)
-        self.cold = self._warm_up is not None
-        self._pool = self._executor(None if forked else warm_up)
-
-    def _executor(self, warm_up):
-        """A ProcessPoolExecutor of self.workers, all started now (a forking executor starts them all at the first
-        submit); ``warm_up`` runs in each as it starts (spawned workers)."""
-        import os
-        from concurrent.futures import ProcessPoolExecutor
-        forked = self.method == "fork"
         with _worker_environment(), (_opencv_single_threaded() if forked else contextlib.nullcontext()):
-            pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=self._ctx, initializer=_start_worker,
-                                       initargs=(os.getpid(), warm_up))
-            for _ in range(self.workers):
-                pool.submit(_nothing)
-        return pool
-
-    def _warm_here(self) -> None:
-        """The forked pool's warm-up, here, once (the warm workers forked later inherit what it loaded)."""
-        if self._warm_up is not None:
-            warm_up, self._warm_up = self._warm_up, None
-            with stdlib_distutils():
-                _warm(warm_up)
-
-    def _warm_workers(self) -> None:
-        """Warm workers from now on: the warm-up run here, the cold workers ended and warm ones forked after it."""
-        self._warm_here()
-        if self.cold:
-            self._pool.shutdown(wait=True)       # idle: the index's scans are done; its manager thread ends
-            self._pool = self._executor(None)
-            self.cold = False
+            if forked and warm_up is not None:
+                with stdlib_distutils():
+                    _warm(warm_up)          # once, here: the forked workers inherit what it loaded
+            self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_start_worker,
+                                             initargs=(os.getpid(), None if forked else warm_up))
+            for _ in range(workers):    # all started now (a forking executor starts them all at the first)
+                self._pool.submit(_nothing)
 
     def run(self, work, tasks, finished) -> None:
         """``work(task)`` for every task, ``finished(task, result)`` here as each ends. On any error or interrupt
         (SIGINT) here, the queued tasks are cancelled and every worker is stopped at once (a task in flight is
         abandoned, its chunk redone on resume) before the exception goes on."""
         from concurrent.futures import FIRST_COMPLETED, wait
+        bar = iter(_bar(len(tasks)))
         try:
-            self._warm_workers()
-            bar = iter(_bar(len(tasks)))
             pending = {self._pool.submit(work, t): t for t in tasks}
             while pending:
                 done, _ = wait(pending, return_when=FIRST_COMPLETED)
@@ -164,7 +137,6 @@ class Pool:
         futures = []
         try:
             futures = [self._pool.submit(fn, *a) for a in args]
-            self._warm_here()                   # while the workers run them
             place = {f: k for k, f in enumerate(futures)}
             pending = set(futures)
             while pending:

@@ -6,9 +6,6 @@ from typing import Iterable, TypeVar
 
 from tqdm import tqdm
 
-#: no monitor thread (tqdm's, started with the first bar shown): the export forks its workers after the index's bar,
-#: and a fork must find no Python thread but the forking one (platform_tools.dataset.engines)
-tqdm.monitor_interval = 0
 T = TypeVar("T")
 _quiet = False
 

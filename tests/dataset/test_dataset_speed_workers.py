@@ -56,9 +56,7 @@ _POOL = (
     "    workers = [p.pid for p in multiprocessing.active_children()]\n"
     "    env_after = os.environ.get('SETUPTOOLS_USE_DISTUTILS')\n"
     "    engines.run_pool(_state, [None] * 6, lambda t, r: got.append(r), 2, None, pool)\n"
-    "    running = [p.pid for p in multiprocessing.active_children()]\n"
-    "print(json.dumps({'parent': os.getpid(), 'workers': workers, 'running': running, 'got': got,\n"
-    "                  'env': [before, env_after],\n"
+    "print(json.dumps({'parent': os.getpid(), 'workers': workers, 'got': got, 'env': [before, env_after],\n"
     "                  'parent_setuptools': 'setuptools' in sys.modules,\n"
     "                  'method': method}))\n")
 
@@ -83,34 +81,31 @@ def _pool_run(tmp_path, method: str | None = None) -> tuple[dict, list[int]]:
 def _check_warm(out: dict) -> None:
     assert len(out["workers"]) == 2                     # both workers exist before any task is submitted
     assert out["env"][0] is None and out["env"][1] is None      # this process's environment as it was
-    assert len(out["got"]) == 6 and {g["pid"] for g in out["got"]} <= set(out["running"])
+    assert len(out["got"]) == 6 and {g["pid"] for g in out["got"]} <= set(out["workers"])
     for g in out["got"]:
         assert g["mcap"] and g["mrcal"] and g["kernels"] == dict.fromkeys(KERNELS, 1) | {"_apply": 1}
         assert g["env"] == "stdlib" and not g["setuptools"]     # mrcal's distutils import did not load setuptools
-    assert not any(_alive(p) for p in out["workers"] + out["running"])     # ended with the block
+    assert not any(_alive(p) for p in out["workers"])          # ended with the block
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
 @pytest.mark.parametrize("method", [None, "fork"])
 def test_forked_workers_are_warm_from_one_warm_up_in_the_parent(tmp_path, method):
     """On Linux, by default (START_ENV unset) and with START_ENV=fork, the warm-up runs once, in the exporting
-    process, and the workers that run tasks are forked from it after it: they hold its kernels and imports without
-    loading them again (spawned, each runs its own warm-up: 0.7 s of CPU each at full size). The workers started
-    with the pool, forked before the warm-up (for the index's scans), have ended by then."""
+    process, and both workers are forked from it: they hold its kernels and imports without loading them again
+    (spawned, each runs its own warm-up: 0.7 s of CPU each at full size)."""
     out, warmed = _pool_run(tmp_path, method)
     assert out["method"] == "fork"
     assert warmed == [out["parent"]]                   # once, and not in a worker
-    assert len(out["running"]) == 2 and not set(out["running"]) & set(out["workers"])
     assert not out["parent_setuptools"]                # the parent's warm-up ran with the stdlib's distutils too
     _check_warm(out)
 
 
 def test_spawned_workers_each_warm_up_before_their_first_task(tmp_path):
-    """With START_ENV=spawn (the default off Linux) each worker runs the warm-up as it starts; the same workers run
-    the index's scans and the tasks."""
+    """With START_ENV=spawn (the default off Linux) each worker runs the warm-up as it starts."""
     out, warmed = _pool_run(tmp_path, "spawn")
     assert out["method"] == "spawn"
-    assert sorted(warmed) == sorted(out["workers"]) == sorted(out["running"])     # in each worker, not the parent
+    assert sorted(warmed) == sorted(out["workers"])      # in each worker, not in the parent
     _check_warm(out)
 
 
@@ -164,10 +159,8 @@ _THREADS = (
     "got = []\n"
     "with engines.started('pool', 2, warm_up) as pool:\n"
     "    forks, method = len(seen['native_after']), pool.method\n"
-    "    pool.map(_threaded_work, [(None,)] * 2)\n"
     "    engines.run_pool(_threaded_work, [None] * 4, lambda t, r: got.append(r), 2, None, pool)\n"
-    "seen |= {'forks': forks, 'all_forks': len(seen['native_after']), 'got': got, 'method': method,\n"
-    "         'cv2_after': cv2.getNumThreads()}\n"
+    "seen |= {'forks': forks, 'got': got, 'method': method, 'cv2_after': cv2.getNumThreads()}\n"
     "print(json.dumps(seen))\n")
 
 
@@ -186,48 +179,19 @@ def test_forked_workers_start_with_no_thread_but_the_forking_one():
     """The default (forked) pool forks from a process holding only its main thread: no Python thread (progress bar,
     executor manager, dask) yet, OpenCV's pool stopped for the fork (engines._opencv_single_threaded) and set back
     after, OpenBLAS's stopped by its own fork handler; the workers then use both libraries' threads and finish.
-    The same at the second pair of forks, the warm workers after a map (the index) ran on the cold ones: the
-    executor of the cold ones and its manager thread have ended. Without _opencv_single_threaded the native count
-    after each fork is 2 or more (tried)."""
+    Without _opencv_single_threaded the native count after each fork is 2 or more (tried)."""
     env = {k: v for k, v in os.environ.items() if k not in (engines.START_ENV, "OMP_NUM_THREADS",
                                                               "OPENBLAS_NUM_THREADS")}
     r = subprocess.run([sys.executable, "-c", _THREADS], cwd=REPO, capture_output=True, text=True, timeout=600,
                        env=env)
     assert r.returncode == 0, r.stderr
     seen = json.loads(r.stdout.strip().splitlines()[-1])
-    assert seen["method"] == "fork" and seen["forks"] == 2 and seen["all_forks"] == 4
+    assert seen["method"] == "fork" and seen["forks"] == 2
     assert seen["native_before"] > 2                 # both libraries' pools were running before the pool started
-    assert seen["python"] == [["MainThread"]] * 4
-    assert seen["native_after"] == [1, 1, 1, 1]
+    assert seen["python"] == [["MainThread"]] * 2
+    assert seen["native_after"] == [1, 1]
     assert seen["cv2_after"] == seen["cv2_threads"] > 1      # OpenCV's thread count given back to the caller
     assert len(seen["got"]) == 4 and len(set(seen["got"])) == 1
-
-
-def _wait_for(path: str) -> bool:
-    """True once the file ``path`` exists (within 120 s), else False."""
-    deadline = time.monotonic() + 120
-    while not os.path.exists(path):
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(0.01)
-    return True
-
-
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
-def test_a_forked_pool_warms_up_here_while_its_workers_run_a_map(tmp_path, monkeypatch):
-    """The map's calls are in the workers when the warm-up runs here: each waits for the file the warm-up writes,
-    and would give up (False) if the warm-up came only after the map."""
-    monkeypatch.delenv(engines.START_ENV, raising=False)
-    marker = tmp_path / "warm"
-    pool = engines.Pool(2, lambda: marker.write_text("warm"), method="fork")
-    try:
-        assert pool.cold
-        assert pool.map(_wait_for, [(str(marker),)] * 4) == [True] * 4
-        got = []
-        pool.run(_state, [None] * 2, lambda t, r: got.append(r["pid"]))
-        assert not pool.cold and len(got) == 2
-    finally:
-        pool.close()
 
 
 def test_an_unknown_start_method_is_one_line(monkeypatch):
