@@ -13,10 +13,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import cv2
 import numpy as np
 
-from calibration.commands.thermal_frames import MAX_CANDIDATES, MAX_FRAMES, _frames, ffc_or_frozen
+from calibration.commands.thermal_frames import MAX_FRAMES, _frames, ffc_or_frozen, spread, write_png
 from platform_tools.rig.conventions import CheckFailed, UserError
 
 #: the rig's streams of the pair, and the folders the pair's pipeline reads (calibration.stereo.pairs)
@@ -62,9 +61,7 @@ def select_pairs(bag: Path, board, target: str, rig, stage: Path, max_pairs: int
         raise UserError(f"--bag {exc}") from None
     masks = [ffc_or_frozen(rec, cam) for cam, _ in SIDES]
     ok = ~masks[0][0][pairs[:, 0]] & ~masks[1][0][pairs[:, 1]] if len(pairs) else np.zeros(0, bool)
-    cand = pairs[ok]
-    if len(cand) > MAX_CANDIDATES:
-        cand = cand[np.linspace(0, len(cand) - 1, MAX_CANDIDATES).round().astype(int)]
+    cand = spread(pairs[ok])
     found, corners, sharp = [], [], []
     for j, left, right, _ in _both(rec, cand):
         dl, dr = detect_target(left, board, target), detect_target(right, board, target)
@@ -84,11 +81,7 @@ def select_pairs(bag: Path, board, target: str, rig, stage: Path, max_pairs: int
     for j, left, right, _ in _both(rec, chosen):
         name = f"{j:06d}.png"
         for img, (_, folder) in ((left, SIDES[0]), (right, SIDES[1])):
-            ok_, png = cv2.imencode(".png", img)
-            if not ok_:
-                raise UserError(f"--bag {bag}: a {folder} frame cannot be written as PNG ({img.dtype}, {img.shape})")
-            (stage / folder).mkdir(parents=True, exist_ok=True)
-            (stage / folder / name).write_bytes(png.tobytes())
+            write_png(stage / folder / name, img, f"--bag {bag}: pair {name}, the {folder} frame")
         trig_of[name] = [int(rec.streams[c].stamp_ns[k]) for (c, _), k in zip(SIDES, chosen[j])]
     return {"bag": str(bag), "paired_by": "trigger", "pairs": int(len(pairs)),
             "ffc_or_frozen": int(len(pairs) - ok.sum()), "looked_at": int(len(cand)), "with_board_in_both": len(found),

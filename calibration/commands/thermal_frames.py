@@ -45,6 +45,22 @@ def _frames(rec, stream: str, index: np.ndarray):
             yield k, stamp, img
 
 
+def spread(cand: np.ndarray, most: int = MAX_CANDIDATES) -> np.ndarray:
+    """At most ``most`` of the candidates ``cand`` (frames, or pairs of frames), evenly spread over them."""
+    if len(cand) > most:
+        cand = cand[np.linspace(0, len(cand) - 1, most).round().astype(int)]
+    return cand
+
+
+def write_png(path: Path, img: np.ndarray, what: str) -> None:
+    """``img`` as the PNG file ``path``; UserError naming ``what`` (the frame) when OpenCV cannot encode it."""
+    ok, png = cv2.imencode(".png", img)
+    if not ok:
+        raise UserError(f"{what}: cannot be written as PNG ({img.dtype}, {img.shape})")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(png.tobytes())
+
+
 def ffc_or_frozen(rec, stream: str) -> tuple[np.ndarray, list, tuple[int, int] | None]:
     """(bool (n,): each frame of ``stream`` in an FFC (the recording's status or telemetry, ffc_periods, with
     calibration.frames' margin) or frozen on its decoded pixels, the FFC spans, the image (width, height))."""
@@ -77,9 +93,7 @@ def select_frames(bag: Path, topic: str, board, target: str, rig, stage: Path,
     st = rec.streams[stream]
     n = len(st.stamp_ns)
     in_ffc, spans, size = ffc_or_frozen(rec, stream)
-    cand = np.flatnonzero(~in_ffc)
-    if len(cand) > MAX_CANDIDATES:
-        cand = cand[np.linspace(0, len(cand) - 1, MAX_CANDIDATES).round().astype(int)]
+    cand = spread(np.flatnonzero(~in_ffc))
     corners, idx, sharp = [], [], []
     for k, _, img in _frames(rec, stream, cand):
         det = detect_target(img, board, target)
@@ -94,10 +108,7 @@ def select_frames(bag: Path, topic: str, board, target: str, rig, stage: Path,
         raise CheckFailed(f"--bag {bag}: no {board[0]}x{board[1]} {target} found in the {len(cand)} frames of "
                           f"{topic} outside FFC looked at; check --board / --target")
     for k, stamp, img in _frames(rec, stream, np.array(chosen)):
-        ok, png = cv2.imencode(".png", img)
-        if not ok:
-            raise UserError(f"--bag {bag}: {topic} frame {stamp}: cannot be written as PNG ({img.dtype}, {img.shape})")
-        (stage / f"{stamp:019d}.png").write_bytes(png.tobytes())
+        write_png(stage / f"{stamp:019d}.png", img, f"--bag {bag}: {topic} frame {stamp}")
     return {"bag": str(bag), "topic": topic, "frames": n, "ffc_spans": spans,
             "ffc_or_frozen": int(in_ffc.sum()), "looked_at": int(len(cand)), "with_board": len(idx),
             "blurred": int(len(idx) - len(usable)), "board_sharpness_median": float(np.median(sharp)) if sharp else 0.0,

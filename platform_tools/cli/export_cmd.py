@@ -66,7 +66,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "null there: the export's own writer, ISA-L deflate level 1 with the UP filter, about 3x "
                         "faster than libpng's level 1, the same pixels); 6 is several times slower and smaller "
                         "(docs/dataset.md)")
-    p.add_argument("--zed-images", choices=("as_recorded", "png"), default=None,     # chunk.ZED_IMAGES
+    p.add_argument("--zed-images", choices=_zed_images(), default=None,
                    help="the ZED images: as_recorded writes a compressed topic's JPEG as the recording holds it, byte "
                         "for byte (smaller, faster, no second encoding), a raw topic as PNG; png decodes and writes "
                         "every one as PNG (default processing.zed_images)")
@@ -75,6 +75,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_rig_options(p)
     add_output_options(p)
     p.set_defaults(handler=cmd_export)
+
+
+def _zed_images() -> tuple[str, ...]:
+    """The values of processing.zed_images, as the rig schema declares them (chunk.ZED_IMAGES is tested equal)."""
+    import typing
+
+    from platform_tools.rig.schema import Processing
+    return typing.get_args(typing.get_type_hints(Processing)["zed_images"])
 
 
 #: the shell's code for a command ended by SIGINT

@@ -24,6 +24,8 @@ LATENCY_MS = {"thermal_left": 2.0, "thermal_right": 28.0}       # within the rig
 
 @pytest.fixture(scope="module")
 def bag(tmp_path_factory, rig):
+    windows = rig.desc.sync.stamp_latency_ms      # the latencies must be ones the trigger assignment accepts
+    assert all(windows[c].min.value <= ms <= windows[c].max.value for c, ms in LATENCY_MS.items())
     root = tmp_path_factory.mktemp("stereobag")
     lenses = truth_lenses()
     T_true = truth_pose(cad_pose())
