@@ -1,0 +1,56 @@
+"""bench/bench_agc_refine.py's two judgements: a corner's lattice spacing is the detector's (corner_spacing: the
+nearest labelled neighbour), and a board is "right" only when it is complete with every corner within 1 px of the
+truth, in either ordering."""
+from __future__ import annotations
+
+import importlib.util
+import os
+import sys
+
+import numpy as np
+
+from calibration.detect.detector import corner_spacing
+from tests.conftest import REPO
+
+
+def _bench():
+    """The bench module, imported with this process's environment and import path left as they were."""
+    saved_env, saved_path = dict(os.environ), list(sys.path)
+    try:
+        spec = importlib.util.spec_from_file_location("bench_agc_refine_under_test",
+                                                      REPO / "bench" / "bench_agc_refine.py")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        return mod
+    finally:
+        os.environ.clear()
+        os.environ.update(saved_env)
+        sys.path[:] = saved_path
+
+
+def test_the_spacing_is_the_detectors_nearest_neighbour():
+    bench = _bench()
+    W, H = bench.BOARD
+    rng = np.random.default_rng(0)
+    j, i = np.mgrid[0:H, 0:W]
+    ij = np.stack([i.ravel(), j.ravel()], 1)
+    # a foreshortened lattice: steps grow along i and shrink along j, so the nearest neighbour changes axis
+    xy = np.stack([20 * ij[:, 0] * (1 + 0.05 * ij[:, 0]), 25 * ij[:, 1] * (1 - 0.06 * ij[:, 1])], 1)
+    xy = xy + rng.normal(0, 0.5, xy.shape)
+    got = bench.lattice_spacing(xy, W, H)
+    assert np.allclose(got, corner_spacing(xy, ij))
+    assert got.min() < 15 and got.max() > 20          # both axes are the nearest somewhere
+
+
+def test_a_board_is_right_only_complete_and_within_1_px():
+    bench = _bench()
+    W, H = bench.BOARD
+    true = np.random.default_rng(1).uniform(0, 600, (W * H, 2))
+    off = true.copy()
+    off[7] += [0.99, 0.0]
+    assert bench.right(off, true) and bench.right(off[::-1], true)      # either ordering
+    off[7] = true[7] + [0.0, 1.01]
+    assert not bench.right(off, true)
+    gap = true.copy()
+    gap[3] = np.nan
+    assert not bench.right(gap, true) and not bench.right(None, true)
