@@ -29,6 +29,22 @@ def rig():
     return load_rig()
 
 
+def bench_module(name: str):
+    """bench/<name>.py imported as a module, with this process's environment and import path left as they were
+    (a bench pins thread counts and puts bench/ on the path when imported)."""
+    import importlib.util
+    saved_env, saved_path = dict(os.environ), list(sys.path)
+    try:
+        spec = importlib.util.spec_from_file_location(f"{name}_under_test", REPO / "bench" / f"{name}.py")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        return mod
+    finally:
+        os.environ.clear()
+        os.environ.update(saved_env)
+        sys.path[:] = saved_path
+
+
 def run_tool(module: str, *args: str, cwd: Path | None = None, timeout: float = 120) -> subprocess.CompletedProcess:
     """Run a console script of this project as a user would (a fresh process), capturing its output."""
     env = dict(os.environ, COLUMNS="120")

@@ -3,29 +3,14 @@ nearest labelled neighbour), and a board is "right" only when it is complete wit
 truth, in either ordering."""
 from __future__ import annotations
 
-import importlib.util
-import os
-import sys
-
 import numpy as np
 
 from calibration.detect.detector import corner_spacing
-from tests.conftest import REPO
+from tests.conftest import bench_module
 
 
 def _bench():
-    """The bench module, imported with this process's environment and import path left as they were."""
-    saved_env, saved_path = dict(os.environ), list(sys.path)
-    try:
-        spec = importlib.util.spec_from_file_location("bench_agc_refine_under_test",
-                                                      REPO / "bench" / "bench_agc_refine.py")
-        mod = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(mod)
-        return mod
-    finally:
-        os.environ.clear()
-        os.environ.update(saved_env)
-        sys.path[:] = saved_path
+    return bench_module("bench_agc_refine")
 
 
 def test_the_spacing_is_the_detectors_nearest_neighbour():

@@ -2,26 +2,14 @@
 JPEG written as recorded are the same image when the JPEG, decoded as OpenCV decodes it, has the PNG's pixels."""
 from __future__ import annotations
 
-import importlib.util
-import os
-
 import cv2
 import numpy as np
 
-from tests.conftest import REPO
+from tests.conftest import bench_module
 
 
 def _bench():
-    """The bench module, imported with this process's environment left as it was (the bench pins thread counts)."""
-    saved = dict(os.environ)
-    try:
-        spec = importlib.util.spec_from_file_location("bench_dataset_under_test", REPO / "bench" / "bench_dataset.py")
-        mod = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(mod)
-        return mod
-    finally:
-        os.environ.clear()
-        os.environ.update(saved)
+    return bench_module("bench_dataset")
 
 
 def test_a_png_and_the_jpeg_it_was_decoded_from_compare_by_pixels(tmp_path):
