@@ -17,7 +17,8 @@ over the fully visible, unoccluded boards:
               board it cannot get right is beyond the detector whatever its earlier stages find.
   peak@truth  an estimator the detector does not use, from the same starts: the peak of the saddle response
               (candidates.saddle_response, the Hessian's Ixy^2 - Ixx Iyy) of the image blurred by PEAK_BLUR_PX,
-              searched within 2 px of the start, then a quadratic through its 3x3 neighbourhood.
+              searched within PEAK_SEARCH_PX of the start, then a quadratic through its 3x3 neighbourhood (in the
+              detector on equalised frames it brought corners closer but lenses not: docs/calibration-synthetic.md).
 
 Usage: .venv/bin/python bench/bench_agc_refine.py [--n 40] [--seed 11] [--families opencv8,kannala-brandt]
        [--condition hard] [--work DIR] [--reuse] [--json]
@@ -47,10 +48,10 @@ from calibration.synth import render_dataset  # noqa: E402
 from calibration.synth.truth_families import FAMILIES, truth_lens  # noqa: E402
 
 BOARD, SQUARE = bi.BOARD, bi.SQUARE
+PEAK_BLUR_PX = 3.5      # peak@truth's blur (the best of 1.0-6.0 px on opencv8 hard AGC seed 11; seed 23 held out)
+PEAK_SEARCH_PX = 2      # ... and its search radius around the start
 RIGHT_PX = 1.0          # issue 14: a corner farther than this from its true corner is a defect
 START_SD_PX = 0.4       # the truth-started refinement's start: truth + N(0, this) per axis
-PEAK_BLUR_PX = 3.5      # peak@truth's blur (the best of 1.0-6.0 on opencv8 hard AGC seed 11)
-PEAK_SEARCH_PX = 2      # ... and its search radius around the start
 
 
 def fully_visible(truth: dict) -> list[dict]:
@@ -79,12 +80,16 @@ def lattice_spacing(true: np.ndarray, W: int, H: int) -> np.ndarray:
 def response_peak(f: np.ndarray, starts: np.ndarray, blur: float = PEAK_BLUR_PX,
                   search: int = PEAK_SEARCH_PX) -> np.ndarray:
     """(n, 2) the saddle response's peak near each start (n, 2) on ``f`` blurred by ``blur``: the largest response
-    within ``search`` px, then the stationary point of a quadratic through its 3x3 neighbourhood; NaN near the
-    image's edge, where that neighbourhood is not a maximum or the step leaves the pixel."""
-    S = saddle_response(cv2.GaussianBlur(f, (0, 0), blur))
+    within ``search`` px, then the stationary point of a quadratic through its 3x3 neighbourhood; NaN for a start
+    that is not finite or near the image's edge, where that neighbourhood is not a maximum or the step leaves the
+    pixel."""
+    S = saddle_response(cv2.GaussianBlur(np.asarray(f, np.float32), (0, 0), blur))
     h, w = S.shape
+    starts = np.asarray(starts, float)
     out = np.full((len(starts), 2), np.nan)
-    for k, (x, y) in enumerate(np.rint(starts).astype(int)):
+    fin = np.isfinite(starts).all(1)
+    for k in np.flatnonzero(fin):
+        x, y = (int(v) for v in np.rint(starts[k]))
         if not (search + 1 <= x < w - search - 1 and search + 1 <= y < h - search - 1):
             continue
         win = S[y - search:y + search + 1, x - search:x + search + 1]
@@ -92,8 +97,8 @@ def response_peak(f: np.ndarray, starts: np.ndarray, blur: float = PEAK_BLUR_PX,
         xx, yy = x - search + dx, y - search + dy
         c = S[yy - 1:yy + 2, xx - 1:xx + 2].astype(float)
         g = np.array([c[1, 2] - c[1, 0], c[2, 1] - c[0, 1]]) / 2
-        hess = np.array([[c[1, 2] - 2 * c[1, 1] + c[1, 0], (c[2, 2] - c[2, 0] - c[0, 2] + c[0, 0]) / 4],
-                         [(c[2, 2] - c[2, 0] - c[0, 2] + c[0, 0]) / 4, c[2, 1] - 2 * c[1, 1] + c[0, 1]]])
+        cross = (c[2, 2] - c[2, 0] - c[0, 2] + c[0, 0]) / 4
+        hess = np.array([[c[1, 2] - 2 * c[1, 1] + c[1, 0], cross], [cross, c[2, 1] - 2 * c[1, 1] + c[0, 1]]])
         if np.linalg.det(hess) <= 0 or hess[0, 0] >= 0:
             continue
         step = -np.linalg.solve(hess, g)
