@@ -127,7 +127,7 @@ def _read(task: dict) -> dict[int, dict[str, np.ndarray | Encoded]]:
             wanted[(task["topics"][s], fr["stamp_ns"])] = (pi, s)
             logs.append(fr["log_ns"])
     files = sorted({task["files"][fr["file"]] for p in task["pairs"] for fr in p["frames"].values()})
-    as_recorded = task["params"].get("zed_images", "as_recorded") == "as_recorded"
+    as_recorded = task["params"]["zed_images"] == "as_recorded"      # Params.zed_images, always in a task
     keep = frozenset(task["topics"][s] for s in ("zed_left", "zed_right") if as_recorded and s in task["topics"])
     images: dict[int, dict[str, np.ndarray | Encoded]] = {}
     for (pi, s), _, img in iter_frames(files, wanted, logs, keep_encoded=keep):
