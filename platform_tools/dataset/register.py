@@ -117,18 +117,35 @@ def _splat_packed(uvz, idx, n, src, out_h, out_w, tol, zbuf, packed):
     """The two passes over the ``n`` points in view: pass 0 into the z-buffer ``zbuf`` (h, w; +inf on entry), pass 1
     into ``packed`` (h, w, C + 2; 0 on entry, C-contiguous): the C colour sums, the weight sum, the weighted depth
     sum of each pixel side by side. The same additions in the same order as three separate arrays: the same sums to
-    the bit. Three colours (the export's BGR) go through :func:`_blend3`."""
+    the bit. Three colours (the export's BGR) go through :func:`_blend3`. A point whose four neighbours are all inside
+    (all but the image's rim) takes them without a bounds test, and the z-buffer keeps the nearer depth with a
+    ``min`` instead of a branch on the comparison (unpredictable where surfaces meet): the same result, the splat
+    1.15 to 1.25 times faster on the export's images (docs/dataset.md "Speed")."""
     C = src.shape[1]
+    zflat = zbuf.reshape(out_h * out_w)
     for j in range(n):                      # pass 0: the z-buffer
         u = uvz[j, 0]
         v = uvz[j, 1]
         z = uvz[j, 2]
         u0 = int(np.floor(u))
         v0 = int(np.floor(v))
-        for corner in range(4):
-            uu, vv, w = _corner(u0, v0, u - u0, v - v0, corner)
-            if 0 <= vv < out_h and 0 <= uu < out_w and w > 0.0 and z < zbuf[vv, uu]:
-                zbuf[vv, uu] = z
+        fu = u - u0
+        fv = v - v0
+        if 0 <= u0 and u0 + 1 < out_w and 0 <= v0 and v0 + 1 < out_h:     # all four neighbours inside
+            q = v0 * out_w + u0
+            if (1.0 - fv) * (1.0 - fu) > 0.0:
+                zflat[q] = min(zflat[q], z)
+            if (1.0 - fv) * fu > 0.0:
+                zflat[q + 1] = min(zflat[q + 1], z)
+            if fv * (1.0 - fu) > 0.0:
+                zflat[q + out_w] = min(zflat[q + out_w], z)
+            if fv * fu > 0.0:
+                zflat[q + out_w + 1] = min(zflat[q + out_w + 1], z)
+            continue
+        for corner in range(4):             # on the image's rim
+            uu, vv, w = _corner(u0, v0, fu, fv, corner)
+            if 0 <= vv < out_h and 0 <= uu < out_w and w > 0.0 and z < zflat[vv * out_w + uu]:
+                zflat[vv * out_w + uu] = z
     if C == 3:
         _blend3(uvz, idx, n, src, out_h, out_w, tol, zbuf, packed.reshape(out_h * out_w * 5))
         return
@@ -160,19 +177,36 @@ def _blend3(uvz, idx, n, src, out_h, out_w, tol, zbuf, flat):
         z = uvz[j, 2]
         u0 = int(np.floor(u))
         v0 = int(np.floor(v))
+        fu = u - u0
+        fv = v - v0
         i = idx[j]
         b = np.float64(src[i, 0])
         g = np.float64(src[i, 1])
         r = np.float64(src[i, 2])
-        for corner in range(4):
-            uu, vv, w = _corner(u0, v0, u - u0, v - v0, corner)
-            if 0 <= vv < out_h and 0 <= uu < out_w and w > 0.0 and z <= zbuf[vv, uu] * (1.0 + tol):
-                p = vv * row + uu * 5
-                flat[p] += w * b
-                flat[p + 1] += w * g
-                flat[p + 2] += w * r
-                flat[p + 3] += w
-                flat[p + 4] += w * z
+        if 0 <= u0 and u0 + 1 < out_w and 0 <= v0 and v0 + 1 < out_h:     # all four neighbours inside
+            q = v0 * out_w + u0
+            p = q * 5
+            _add5(flat, p, (1.0 - fv) * (1.0 - fu), z, zbuf[v0, u0] * (1.0 + tol), b, g, r)
+            _add5(flat, p + 5, (1.0 - fv) * fu, z, zbuf[v0, u0 + 1] * (1.0 + tol), b, g, r)
+            _add5(flat, p + row, fv * (1.0 - fu), z, zbuf[v0 + 1, u0] * (1.0 + tol), b, g, r)
+            _add5(flat, p + row + 5, fv * fu, z, zbuf[v0 + 1, u0 + 1] * (1.0 + tol), b, g, r)
+            continue
+        for corner in range(4):             # on the image's rim
+            uu, vv, w = _corner(u0, v0, fu, fv, corner)
+            if 0 <= vv < out_h and 0 <= uu < out_w:
+                _add5(flat, vv * row + uu * 5, w, z, zbuf[vv, uu] * (1.0 + tol), b, g, r)
+
+
+@numba.njit(cache=True, inline="always")
+def _add5(flat, p, w, z, zmax, b, g, r):
+    """One corner of :func:`_blend3`: the five sums at ``flat[p:p + 5]`` when the weight is positive and the point
+    is on the nearest surface (``z <= zmax``)."""
+    if w > 0.0 and z <= zmax:
+        flat[p] += w * b
+        flat[p + 1] += w * g
+        flat[p + 2] += w * r
+        flat[p + 3] += w
+        flat[p + 4] += w * z
 
 
 @dataclass

@@ -173,3 +173,51 @@ def test_register_u8_writes_the_pixels_of_the_float_path(scene):
     assert b.fraction == float(a.mask.mean())
     mono = reg.register_u8(depth, bgr[..., 1])                              # one channel: (h, w)
     assert mono.image.shape == a.mask.shape and np.array_equal(mono.image, a.image_u8()[..., 1])
+
+
+def _splat_reference(uvz, src, h, w, tol):
+    """The two passes of register._splat_packed as plain Python, point by point and corner by corner in the same
+    order: the same sums to the bit."""
+    zbuf = np.full((h, w), np.inf)
+    packed = np.zeros((h, w, src.shape[1] + 2))
+    corners = []
+    for u, v, z in uvz:
+        u0, v0 = int(np.floor(u)), int(np.floor(v))
+        fu, fv = u - u0, v - v0
+        corners.append([(u0 + du, v0 + dv, (fv if dv else 1.0 - fv) * (fu if du else 1.0 - fu), z)
+                        for dv in (0, 1) for du in (0, 1)])
+    for cs in corners:
+        for uu, vv, wt, z in cs:
+            if 0 <= vv < h and 0 <= uu < w and wt > 0.0 and z < zbuf[vv, uu]:
+                zbuf[vv, uu] = z
+    for j, cs in enumerate(corners):
+        for uu, vv, wt, z in cs:
+            if 0 <= vv < h and 0 <= uu < w and wt > 0.0 and z <= zbuf[vv, uu] * (1.0 + tol):
+                packed[vv, uu, :-2] += wt * src[j].astype(np.float64)
+                packed[vv, uu, -2] += wt
+                packed[vv, uu, -1] += wt * z
+    return zbuf, packed
+
+
+@pytest.mark.parametrize("channels", [3, 1])
+def test_splat_on_the_rim_and_on_whole_pixels_is_the_reference_to_the_bit(channels):
+    """The splat's fast path for points whose four neighbours are inside and its path for the image's rim give what
+    the plain two-pass loop gives, bit for bit: points anywhere in (-1, w) x (-1, h), on whole and half pixels (zero
+    weights), on the last row and column, occluding one another (a z-buffer that differs from pixel to pixel, some
+    points within its tolerance)."""
+    from platform_tools.dataset.register import _splat_packed
+    rng = np.random.default_rng(7)
+    h, w, tol = 12, 16, 0.02
+    uv = np.concatenate([rng.uniform([-1, -1], [w, h], (300, 2)),
+                         rng.integers([-1, -1], [w, h], (60, 2)).astype(float),             # whole pixels
+                         rng.integers([-1, -1], [w, h], (40, 2)) + 0.5,
+                         [[w - 1, h - 1], [w - 1.0 + 1e-9, 0.0], [-1.0 + 1e-9, h - 1.0 + 1e-9], [0.0, 0.0]]])
+    z = rng.uniform(1.0, 4.0, len(uv))                # each pixel's nearest differs from its neighbours'
+    z[::3] = z[1::3][:len(z[::3])] * 1.01               # and some points within the tolerance of another
+    uvz = np.ascontiguousarray(np.column_stack([uv, z]))
+    src = rng.integers(0, 256, (len(uvz), channels)).astype(np.uint8)
+    zbuf, packed = np.full((h, w), np.inf), np.zeros((h, w, channels + 2))
+    _splat_packed(uvz, np.arange(len(uvz)), len(uvz), src, h, w, tol, zbuf, packed)
+    ref_z, ref_packed = _splat_reference(uvz, src, h, w, tol)
+    assert np.array_equal(zbuf, ref_z) and np.array_equal(packed, ref_packed)
+    assert (packed[..., -2] > 0).sum() > 0.8 * h * w           # the points cover the image, rim included
