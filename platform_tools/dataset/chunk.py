@@ -135,14 +135,19 @@ def _read(task: dict) -> dict[int, dict[str, np.ndarray | Encoded]]:
     return images
 
 
-def warm_up() -> None:
-    """Make this process ready for :func:`process_chunk` before its first task (engines.Pool runs it once, in the
-    process its workers are forked from, or in each spawned worker): the numba kernels of the 8-bit conversion and
-    the registration loaded, mrcal and the MCAP reader imported. No OpenCV call (a thread pool OpenCV started
-    would not survive a fork)."""
+def preload() -> None:
+    """What the index's scans need (indexscan.scan_part): the MCAP reader imported, in the process a pool's workers
+    are forked from (engines.Pool ``preload``)."""
     import mcap.reader  # noqa: F401
     import mcap_ros2.decoder  # noqa: F401
 
+
+def warm_up() -> None:
+    """Make this process ready for :func:`process_chunk` before its first task (engines.Pool runs it in each worker:
+    a spawned one as it starts, a forked one after the index): the numba kernels of the 8-bit conversion and the
+    registration loaded, mrcal and the MCAP reader imported. No OpenCV call (a thread pool OpenCV started would not
+    survive a fork)."""
+    preload()
     from . import register
     thermal8.warm_up()
     register.warm_up()

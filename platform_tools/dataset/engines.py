@@ -83,12 +83,14 @@ def _died(exc: Exception) -> EngineError:
 
 
 class Pool:
-    """A process pool of workers that end with this process (workers.die_with_parent), started at once and warm:
-    ``warm_up`` (imports, numba's kernels loaded; no OpenCV call) runs in each spawned worker as it starts, or
-    (``method`` "fork", :func:`start_method`) once here, the workers forked after it. :meth:`map` runs calls (the
-    index's chunk scans), :meth:`run` tasks; :meth:`close` ends the workers."""
+    """A process pool of workers that end with this process (workers.die_with_parent), started at once. ``warm_up``
+    (imports, numba's kernels loaded; no OpenCV call) runs in each spawned worker as it starts; forked workers
+    (``method`` "fork", :func:`start_method`) run it once each after the calls of the first :meth:`map` (the index's
+    chunk scans, which do not need it), while this process plans the work from what the map returned, and before
+    the first :meth:`run`'s tasks. ``preload`` (imports the map's calls need) runs here before the workers are
+    forked. :meth:`map` runs calls, :meth:`run` tasks; :meth:`close` ends the workers."""
 
-    def __init__(self, workers: int, warm_up=None, method: str | None = None):
+    def __init__(self, workers: int, warm_up=None, method: str | None = None, preload=None):
         import multiprocessing
         import os
         from concurrent.futures import ProcessPoolExecutor
@@ -99,14 +101,27 @@ class Pool:
         self._before = set(multiprocessing.active_children())
         forked = method == "fork"
         self._closed = False
+        #: the warm-up each forked worker still has to run (:meth:`_warm_workers`); None once submitted
+        self._deferred = warm_up if forked else None
+        #: a forked worker that has run its warm-up waits here for the others to have taken theirs
+        barrier = ctx.Barrier(workers) if self._deferred is not None else None
         with _worker_environment(), (_opencv_single_threaded() if forked else contextlib.nullcontext()):
-            if forked and warm_up is not None:
+            if forked and preload is not None:
                 with stdlib_distutils():
-                    _warm(warm_up)          # once, here: the forked workers inherit what it loaded
+                    _warm(preload)          # here: the forked workers inherit what it loaded
             self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_start_worker,
-                                             initargs=(os.getpid(), None if forked else warm_up))
+                                             initargs=(os.getpid(), None if forked else warm_up, barrier))
             for _ in range(workers):    # all started now (a forking executor starts them all at the first)
                 self._pool.submit(_nothing)
+
+    def _warm_workers(self) -> None:
+        """Queue each forked worker's warm-up (once): one call per worker, each of which waits for the others
+        (the barrier passed to :func:`_start_worker`), so that no worker takes two and leaves another cold."""
+        if self._deferred is None:
+            return
+        warm_up, self._deferred = self._deferred, None
+        for _ in range(self.workers):
+            self._pool.submit(_warm_worker, warm_up)
 
     def run(self, work, tasks, finished) -> None:
         """``work(task)`` for every task, ``finished(task, result)`` here as each ends. On any error or interrupt
@@ -115,6 +130,7 @@ class Pool:
         from concurrent.futures import FIRST_COMPLETED, wait
         bar = iter(_bar(len(tasks)))
         try:
+            self._warm_workers()                # no map came first (an index read here)
             pending = {self._pool.submit(work, t): t for t in tasks}
             while pending:
                 done, _ = wait(pending, return_when=FIRST_COMPLETED)
@@ -137,6 +153,7 @@ class Pool:
         futures = []
         try:
             futures = [self._pool.submit(fn, *a) for a in args]
+            self._warm_workers()                # each worker, once its last call is done
             place = {f: k for k, f in enumerate(futures)}
             pending = set(futures)
             while pending:
@@ -244,20 +261,41 @@ def _opencv_single_threaded():
         cv2.setNumThreads(n)
 
 
-def _start_worker(parent_pid: int, warm_up) -> None:
-    """The pool's initializer: end with the parent, then (a spawned worker) get ready for work."""
+#: the barrier a forked worker waits at after its warm-up (:func:`_warm_worker`), set by :func:`_start_worker`
+_barrier: list = []
+#: how long a warm worker waits for the others to take their warm-up; a worker still busy after it warms up in its
+#: next task instead (numba loads its kernels at their first call)
+WARM_WAIT_S = 10.0
+
+
+def _start_worker(parent_pid: int, warm_up, barrier=None) -> None:
+    """The pool's initializer: end with the parent, then (a spawned worker) get ready for work; (a forked one) keep
+    the barrier of :func:`_warm_worker`."""
     from .workers import die_with_parent
     die_with_parent(parent_pid)
+    _barrier[:] = [barrier] if barrier is not None else []
     if warm_up is not None:
         _warm(warm_up)
 
 
+def _warm_worker(warm_up) -> None:
+    """A forked worker's warm-up (Pool._warm_workers), then a wait until every worker has taken its own."""
+    import threading
+    with stdlib_distutils():
+        _warm(warm_up)
+    if _barrier:
+        try:
+            _barrier[0].wait(WARM_WAIT_S)
+        except threading.BrokenBarrierError:       # a worker that did not come in time (busy, or gone)
+            pass
+
+
 @contextlib.contextmanager
-def started(engine: str, workers: int, warm_up=None):
-    """The engine's workers started now, for :func:`run_pool` (``pool=``) later; None for engines that start their
-    own (inline, dask) or a pool of one. The workers are stopped when the block ends with an exception, let finish
-    otherwise."""
-    pool = Pool(workers, warm_up) if engine == "pool" and workers > 1 else None
+def started(engine: str, workers: int, warm_up=None, preload=None):
+    """The engine's workers started now (:class:`Pool`), for :func:`run_pool` (``pool=``) later; None for engines
+    that start their own (inline, dask) or a pool of one. The workers are stopped when the block ends with an
+    exception, let finish otherwise."""
+    pool = Pool(workers, warm_up, preload=preload) if engine == "pool" and workers > 1 else None
     try:
         yield pool
     except BaseException:

@@ -44,7 +44,7 @@ from typing import Callable
 from platform_tools.rig import atomic
 from . import card, thermal8
 from .calib import CalibrationError, at_recorded_size, for_recording, load_calibration, model_to_dict, zed_right
-from .chunk import FILE_COLUMNS, KINDS, TMP_SUFFIX, process_chunk, warm_up
+from .chunk import FILE_COLUMNS, KINDS, TMP_SUFFIX, preload, process_chunk, warm_up
 from .decode import IMAGE_STREAMS, probe_sizes
 from .engines import ENGINES, EngineError, start_method, started, stdlib_distutils
 from .pairing import plan
@@ -206,8 +206,9 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
            on_chunk: Callable[[str], None] | None = None, topic_map=None, command: list[str] | None = None) -> dict:
     """``calibration``: a folder of models overriding the recordings' camera_info and the nominal models;
     ``topic_map``: a :class:`.layout.Layout` (``--topics``) instead of the detected layout; ``command``: the
-    command line, for the dataset card. A pool's workers start (and load their kernels) first, then scan the
-    recordings' chunks for the index (recording.open_recording ``pool``) and run the chunks (engines.started)."""
+    command line, for the dataset card. A pool's workers start first (engines.started), scan the recordings' chunks
+    for the index (recording.open_recording ``pool``), load their kernels while this process plans, and run the
+    chunks."""
     if engine == "pool" and workers > 1:
         try:
             start_method()
@@ -215,7 +216,7 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
             raise ExportError(str(exc)) from None
     with stdlib_distutils():
         import mrcal  # noqa: F401 - the calibration's, imported without setuptools (engines.stdlib_distutils)
-    with started(engine, workers, warm_up) as pool:
+    with started(engine, workers, warm_up, preload) as pool:
         return _export(recordings, out, rig, params, calibration=calibration, engine=engine, workers=workers,
                        scheduler=scheduler, recover=recover, on_chunk=on_chunk, topic_map=topic_map,
                        command=command, pool=pool)

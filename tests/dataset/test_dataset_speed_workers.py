@@ -1,8 +1,10 @@
 """The export's workers start before the work is known (engines.started) and are ready when it comes: numba's kernels
 loaded by chunk.warm_up with the argument types of the real call (no second specialisation), mrcal imported with the
-standard library's distutils; on Linux (the default there) the warm-up runs once and the workers are forked from it;
-an exception in the block stops them; a process running chunks reuses the memory it frees (workers.keep_freed_memory); the fork happens
-with no thread but the forking one. Checked in real processes."""
+standard library's distutils; on Linux (the default there) the workers are forked from the exporting process and each
+runs the warm-up once, after the index's scans (the pool's first map, which does not wait for it) or before the first
+chunk; spawned workers run it as they start; an exception in the block stops them; a process running chunks reuses
+the memory it frees (workers.keep_freed_memory); the fork happens with no thread but the forking one. Checked in real
+processes."""
 from __future__ import annotations
 
 import json
@@ -47,18 +49,29 @@ def _alive(pid: int) -> bool:
 _POOL = (
     "import functools, json, multiprocessing, os, sys\n"
     "from platform_tools.dataset import engines\n"
-    "from tests.dataset.test_dataset_speed_workers import _state, _warm_noting\n"
+    "from tests.dataset.test_dataset_speed_workers import _scan_state, _state, _warm_noting\n"
     "warm = functools.partial(_warm_noting, sys.argv[1])\n"
     "got = []\n"
     "before = os.environ.get('SETUPTOOLS_USE_DISTUTILS')\n"
+    "scans = []\n"
     "with engines.started('pool', 2, warm) as pool:\n"
     "    method = pool.method\n"
     "    workers = [p.pid for p in multiprocessing.active_children()]\n"
     "    env_after = os.environ.get('SETUPTOOLS_USE_DISTUTILS')\n"
+    "    if sys.argv[2] == 'map':\n"
+    "        scans = pool.map(_scan_state, [(k,) for k in range(5)])\n"
     "    engines.run_pool(_state, [None] * 6, lambda t, r: got.append(r), 2, None, pool)\n"
     "print(json.dumps({'parent': os.getpid(), 'workers': workers, 'got': got, 'env': [before, env_after],\n"
-    "                  'parent_setuptools': 'setuptools' in sys.modules,\n"
+    "                  'parent_setuptools': 'setuptools' in sys.modules, 'scans': scans,\n"
     "                  'method': method}))\n")
+
+
+def _scan_state(k: int) -> dict:
+    """A map call (as the index's scans are): the first one long, so that the other worker ends its calls first and
+    would take both warm-ups if nothing held it back; returns :func:`_state`."""
+    if k == 0:
+        time.sleep(1.0)
+    return _state()
 
 
 def _warm_noting(where: str) -> None:
@@ -68,11 +81,12 @@ def _warm_noting(where: str) -> None:
         f.write(f"{os.getpid()}\n")
 
 
-def _pool_run(tmp_path, method: str | None = None) -> tuple[dict, list[int]]:
-    """(what _POOL printed, the pids the warm-up ran in); ``method``: engines.START_ENV set to it."""
+def _pool_run(tmp_path, method: str | None = None, first: str = "run") -> tuple[dict, list[int]]:
+    """(what _POOL printed, the pids the warm-up ran in); ``method``: engines.START_ENV set to it; ``first``: "map"
+    (5 map calls before the tasks, as the export's index) or "run" (the tasks only)."""
     where = tmp_path / "warmed"
     env = {k: v for k, v in os.environ.items() if k != engines.START_ENV} | ({engines.START_ENV: method} if method else {})
-    r = subprocess.run([sys.executable, "-c", _POOL, str(where)], cwd=REPO, capture_output=True, text=True,
+    r = subprocess.run([sys.executable, "-c", _POOL, str(where), first], cwd=REPO, capture_output=True, text=True,
                        timeout=600, env=env)
     assert r.returncode == 0, r.stderr
     return json.loads(r.stdout.strip().splitlines()[-1]), [int(x) for x in where.read_text().split()]
@@ -89,15 +103,20 @@ def _check_warm(out: dict) -> None:
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
-@pytest.mark.parametrize("method", [None, "fork"])
-def test_forked_workers_are_warm_from_one_warm_up_in_the_parent(tmp_path, method):
-    """On Linux, by default (START_ENV unset) and with START_ENV=fork, the warm-up runs once, in the exporting
-    process, and both workers are forked from it: they hold its kernels and imports without loading them again
-    (spawned, each runs its own warm-up: 0.7 s of CPU each at full size)."""
-    out, warmed = _pool_run(tmp_path, method)
+@pytest.mark.parametrize("method,first", [(None, "map"), ("fork", "map"), (None, "run")])
+def test_forked_workers_each_warm_up_once_after_the_index(tmp_path, method, first):
+    """On Linux, by default (START_ENV unset) and with START_ENV=fork, the workers are forked from the exporting
+    process without the warm-up (it loads nothing of it) and each runs it once: after the pool's first map's calls,
+    which run cold (the index's scans need no kernel, and do not wait for them), or, with no map, before the first
+    task. A worker done with its calls early does not take the other's warm-up (each waits for the other)."""
+    out, warmed = _pool_run(tmp_path, method, first)
     assert out["method"] == "fork"
-    assert warmed == [out["parent"]]                   # once, and not in a worker
-    assert not out["parent_setuptools"]                # the parent's warm-up ran with the stdlib's distutils too
+    assert sorted(warmed) == sorted(out["workers"])    # once in each worker, never in the parent
+    assert not out["parent_setuptools"]
+    if first == "map":
+        assert len(out["scans"]) == 5
+        for g in out["scans"]:                         # every map call ran before any warm-up
+            assert g["pid"] in out["workers"] and g["kernels"] == dict.fromkeys(KERNELS, 0) | {"_apply": 0}
     _check_warm(out)
 
 
