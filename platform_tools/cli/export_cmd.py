@@ -21,8 +21,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "again to resume an interrupted export (Ctrl-C or SIGTERM stops every worker and "
                                    "keeps the finished chunks; workers end if this process is killed); a folder "
                                    "holding a different export is refused.",
-                       epilog="Workers (--workers N > 1): forked from this process after one warm-up on Linux "
-                              "(the default there), spawned elsewhere or when this process runs other threads; "
+                       epilog="Workers (--workers N > 1): forked from this process on Linux (the default there; "
+                              "each loads its kernels after indexing), spawned elsewhere or when this process runs "
+                              "other threads; "
                               "the environment variable PLATFORM_TOOLS_EXPORT_WORKERS=fork|spawn chooses "
                               "(docs/dataset.md \"Speed and clean stops\"). "
                               "Exit codes: 0 done, 2 bad input (one line naming the file, topic or option; nothing "

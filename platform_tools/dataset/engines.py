@@ -34,10 +34,10 @@ def run_inline(work, tasks, finished, workers, scheduler, pool=None) -> None:
 MANAGER_JOIN_S = 10.0
 
 
-#: how the pool's workers start (this variable, read when a pool starts): "fork" (the default on Linux), the
-#: warm-up run once here and the workers forked from this process after it, sharing what it loaded (imports, numba's
-#: kernels: about 0.7 s of CPU per spawned worker at full size, docs/dataset.md "Speed"), or "spawn" (the default
-#: elsewhere), each worker a fresh interpreter running the warm-up itself
+#: how the pool's workers start (this variable, read when a pool starts): "fork" (the default on Linux), the workers
+#: forked from this process, sharing the imports it has (a spawned worker's cost about 0.7 s of CPU each at full size,
+#: docs/dataset.md "Speed"), each running the warm-up once after the index's scans (Pool), or "spawn" (the default
+#: elsewhere), each worker a fresh interpreter running the warm-up as it starts
 START_ENV = "PLATFORM_TOOLS_EXPORT_WORKERS"
 START_METHODS = ("spawn", "fork")
 
