@@ -78,6 +78,18 @@ def _corner(u0, v0, fu, fv, corner):
     return u0 + du, v0 + dv, (fv if dv else 1.0 - fv) * (fu if du else 1.0 - fu)
 
 
+@numba.njit(cache=True, inline="always")
+def _inside(u0, v0, out_w, out_h):
+    """Whether all four neighbours of a point at (u0 + fu, v0 + fv) lie inside an ``out_w`` x ``out_h`` image."""
+    return 0 <= u0 and u0 + 1 < out_w and 0 <= v0 and v0 + 1 < out_h
+
+
+@numba.njit(cache=True, inline="always")
+def _weights(fu, fv):
+    """The bilinear weights of the four neighbours in :func:`_corner`'s order, as the same products."""
+    return (1.0 - fv) * (1.0 - fu), (1.0 - fv) * fu, fv * (1.0 - fu), fv * fu
+
+
 @numba.njit(cache=True)
 def _points_compact(depth, rays, R, t, kind, k, qext, out_w, out_h, uvz, idx):
     """Thermal pixel coordinates and depth of the ZED pixels in view (with depth, in front, projecting inside), in
@@ -131,15 +143,16 @@ def _splat_packed(uvz, idx, n, src, out_h, out_w, tol, zbuf, packed):
         v0 = int(np.floor(v))
         fu = u - u0
         fv = v - v0
-        if 0 <= u0 and u0 + 1 < out_w and 0 <= v0 and v0 + 1 < out_h:     # all four neighbours inside
+        if _inside(u0, v0, out_w, out_h):
             q = v0 * out_w + u0
-            if (1.0 - fv) * (1.0 - fu) > 0.0:
+            w0, w1, w2, w3 = _weights(fu, fv)
+            if w0 > 0.0:
                 zflat[q] = min(zflat[q], z)
-            if (1.0 - fv) * fu > 0.0:
+            if w1 > 0.0:
                 zflat[q + 1] = min(zflat[q + 1], z)
-            if fv * (1.0 - fu) > 0.0:
+            if w2 > 0.0:
                 zflat[q + out_w] = min(zflat[q + out_w], z)
-            if fv * fu > 0.0:
+            if w3 > 0.0:
                 zflat[q + out_w + 1] = min(zflat[q + out_w + 1], z)
             continue
         for corner in range(4):             # on the image's rim
@@ -183,13 +196,13 @@ def _blend3(uvz, idx, n, src, out_h, out_w, tol, zbuf, flat):
         b = np.float64(src[i, 0])
         g = np.float64(src[i, 1])
         r = np.float64(src[i, 2])
-        if 0 <= u0 and u0 + 1 < out_w and 0 <= v0 and v0 + 1 < out_h:     # all four neighbours inside
-            q = v0 * out_w + u0
-            p = q * 5
-            _add5(flat, p, (1.0 - fv) * (1.0 - fu), z, zbuf[v0, u0] * (1.0 + tol), b, g, r)
-            _add5(flat, p + 5, (1.0 - fv) * fu, z, zbuf[v0, u0 + 1] * (1.0 + tol), b, g, r)
-            _add5(flat, p + row, fv * (1.0 - fu), z, zbuf[v0 + 1, u0] * (1.0 + tol), b, g, r)
-            _add5(flat, p + row + 5, fv * fu, z, zbuf[v0 + 1, u0 + 1] * (1.0 + tol), b, g, r)
+        if _inside(u0, v0, out_w, out_h):
+            p = (v0 * out_w + u0) * 5
+            w0, w1, w2, w3 = _weights(fu, fv)
+            _add5(flat, p, w0, z, zbuf[v0, u0] * (1.0 + tol), b, g, r)
+            _add5(flat, p + 5, w1, z, zbuf[v0, u0 + 1] * (1.0 + tol), b, g, r)
+            _add5(flat, p + row, w2, z, zbuf[v0 + 1, u0] * (1.0 + tol), b, g, r)
+            _add5(flat, p + row + 5, w3, z, zbuf[v0 + 1, u0 + 1] * (1.0 + tol), b, g, r)
             continue
         for corner in range(4):             # on the image's rim
             uu, vv, w = _corner(u0, v0, fu, fv, corner)
