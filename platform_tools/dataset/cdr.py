@@ -33,9 +33,10 @@ def _cdr_string(data, pos: int, u32) -> tuple[str, int]:
     return bytes(data[pos + 4:pos + 4 + n]).rstrip(b"\0").decode("utf-8", "replace"), pos + 4 + n
 
 
-def image_fields(data) -> tuple[int, int, str, bool, int, int]:
+def image_fields(data, size: int | None = None) -> tuple[int, int, str, bool, int, int]:
     """(height, width, encoding, is_bigendian, step, offset of the pixel bytes) of a CDR-serialised
-    sensor_msgs/Image (bytes or a memoryview), read from its fields without copying the pixels."""
+    sensor_msgs/Image (bytes or a memoryview), read from its fields without copying the pixels. ``size``: the whole
+    message's length when ``data`` is only its first bytes (default: ``len(data)``)."""
     endian = "<" if data[1] == 1 else ">"
     u32 = struct.Struct(endian + "I")
     _, pos = _cdr_string(data, 12, u32)                  # after encapsulation, stamp sec + nanosec: frame_id
@@ -48,15 +49,15 @@ def image_fields(data) -> tuple[int, int, str, bool, int, int]:
     pos = _align(pos + 4, 4)
     n = u32.unpack_from(data, pos)[0]
     pos += 4
-    if n < height * step or pos + n > len(data):
+    if n < height * step or pos + n > (len(data) if size is None else size):
         raise ValueError(f"sensor_msgs/Image of {height} rows x {step} bytes holds {n} bytes")
     return height, width, encoding, bigendian, step, pos
 
 
-def image_layout(data: bytes) -> tuple[int, int, int, int]:
+def image_layout(data: bytes, size: int | None = None) -> tuple[int, int, int, int]:
     """(height, width, step, offset of the pixel bytes) of a CDR-serialised sensor_msgs/Image, read
-    from its fields without copying the pixels."""
-    height, width, _, _, step, pos = image_fields(data)
+    from its fields without copying the pixels (``size``: as :func:`image_fields`)."""
+    height, width, _, _, step, pos = image_fields(data, size)
     return height, width, step, pos
 
 

@@ -5,9 +5,12 @@ Of a rig stream's message: its header stamp; of a thermal frame also a digest of
 (two consecutive frames with equal digests: a frozen frame, the FFC), its Boson telemetry frame counter and FFC state.
 Of the other wanted topics (status, camera_info: small messages) the data itself, for the caller to decode.
 
-Why in parts: the thermal frames are read whole (their tails and telemetry rows end them), and decompressing them is
-most of an index's time (2.75 of 4.6 s of CPU on this project's simulated 60 s full-size recording,
-docs/dataset.md "Speed"), while the export's workers would wait for the plan. Every event carries its place in
+From an uncompressed chunk (rosbags writes them) a thermal frame is read in part (:class:`.mcapscan.Sparse`): its
+fields, then one read of the rows holding its tail and its telemetry rows; a ZED image only for its stamp.
+
+Why in parts: from a compressed chunk the thermal frames are read whole (their tails and telemetry rows end them),
+and decompressing them is most of an index's time (2.75 of 4.6 s of CPU on this project's simulated 60 s
+full-size recording, docs/dataset.md "Speed"), while the export's workers would wait for the plan. Every event carries its place in
 mcap's order (:func:`.mcapscan.iter_keyed`), so the parts merge back into the order one scan reads: the index is
 the same however the chunks were split (tests/dataset/test_dataset_indexscan.py).
 """
@@ -20,6 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .cdr import STAMP_BYTES, header_stamp, image_layout
+from .mcapscan import Sparse
 
 #: the bytes at the end of a thermal frame's image rows compared to find frozen frames
 TAIL_BYTES = 4096
@@ -30,6 +34,9 @@ PARTS_PER_WORKER = 4
 SERIAL_PARTS = 16
 #: the digest of a tail (blake2b): 16 bytes sent back per frame instead of TAIL_BYTES
 DIGEST_BYTES = 16
+#: the bytes of a thermal frame read first from an uncompressed chunk (mcapscan.Sparse): its CDR header and Image
+#: fields (a frame_id longer than this is read whole); the tail and the telemetry rows are read after them
+FIELDS_BYTES = 256
 
 
 @dataclass(frozen=True)
@@ -55,25 +62,40 @@ def rows_below(rows: int, model_px: tuple, width: int, height: int) -> int:
 
 def thermal_fields(data, wanted: Wanted, rows_cache: dict) -> tuple[bytes, int, int]:
     """(digest of the last TAIL_BYTES of a thermal frame's image rows, its telemetry frame counter or -1, its telemetry
-    FFC state or -1) of a CDR sensor_msgs/Image; a frame whose fields cannot be read: the digest of its last
+    FFC state or -1) of a CDR sensor_msgs/Image (bytes, a memoryview, or an :class:`.mcapscan.Sparse` of which only
+    the fields, the tail and the telemetry rows are read); a frame whose fields cannot be read: the digest of its last
     TAIL_BYTES, -1, -1."""
     from platform_tools.boson.telemetry import TelemetryError, decode_image_data
+    if isinstance(data, Sparse):
+        head, read = data.head, data.read
+    else:
+        head, read = data, lambda a, b: data[a:b]
+    size = len(data)
     try:
-        height, width, step, off = image_layout(data)
+        try:
+            height, width, step, off = image_layout(head, size)
+        except (struct.error, ValueError, IndexError):
+            if len(head) == size:
+                raise
+            head = read(0, size)                # fields longer than the head read (a long frame_id): read it all
+            height, width, step, off = image_layout(head, size)
     except (struct.error, ValueError, IndexError):
-        return _digest(data[-TAIL_BYTES:]), -1, -1
+        return _digest(read(max(0, size - TAIL_BYTES), size)), -1, -1
     if (width, height) not in rows_cache:
         rows_cache[(width, height)] = rows_below(wanted.telemetry_rows, wanted.model_px, width, height)
     rows = rows_cache[(width, height)]
-    end = off + (height - rows) * step
+    # one read from a row's start: the image rows holding the tail, then the telemetry rows
+    above = min(height - rows, -(-TAIL_BYTES // step)) if step > 0 else 0
+    first = off + (height - rows - above) * step
+    blob = memoryview(read(first, off + height * step))
     counter = ffc = -1
     if rows:
         try:
-            tel = decode_image_data(memoryview(data)[off:off + height * step], height, step, rows)
+            tel = decode_image_data(blob, above + rows, step, rows)
             counter, ffc = int(tel.frame_counter), int(tel.ffc_status)
         except TelemetryError:
             pass
-    return _digest(data[max(off, end - TAIL_BYTES):end]), counter, ffc
+    return _digest(blob[max(0, above * step - TAIL_BYTES):above * step]), counter, ffc
 
 
 def _digest(tail) -> bytes:
@@ -87,7 +109,7 @@ def event(log_time: int, offset: int, place: int, topic: str, data, wanted: Want
     stream = wanted.streams.get(topic)
     if stream is None:
         return log_time, offset, place, topic, bytes(data)
-    stamp = header_stamp(data)
+    stamp = header_stamp(data.head if isinstance(data, Sparse) else data)
     if not stream.startswith("thermal"):
         return log_time, offset, place, topic, stamp, None, -1, -1
     return (log_time, offset, place, topic, stamp) + thermal_fields(data, wanted, rows_cache)
@@ -101,10 +123,13 @@ def scan_part(path: str, channels: dict, wanted: Wanted, chunks: list) -> list[t
     from .workers import keep_freed_memory
     keep_freed_memory()                 # each chunk's buffers reuse the last one's pages (workers.keep_freed_memory)
     heads = {cid: STAMP_BYTES for cid, t in channels.items() if t in wanted.stamps_only}
+    sparse = {cid: FIELDS_BYTES for cid, t in channels.items()
+              if wanted.streams.get(t, "").startswith("thermal") and cid not in heads}
     rows_cache: dict = {}
     with open(path, "rb") as fh:
         return [event(t, off, place, channels[cid], data, wanted, rows_cache)
-                for t, off, place, cid, data in mcapscan.iter_keyed(fh, None, channels, chunks=chunks, heads=heads)]
+                for t, off, place, cid, data in mcapscan.iter_keyed(fh, None, channels, chunks=chunks, heads=heads,
+                                                                     sparse=sparse)]
 
 
 def parts(chunks: list, n: int) -> list[list]:

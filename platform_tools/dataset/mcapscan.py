@@ -16,10 +16,19 @@ it, when that ends before PREFIX_FRACTION of its records: the message index (wri
 each message starts. On this project's simulated full-size recording (20 s) the index then decompresses 981 of
 2,359 MB; its scan takes 7 % less CPU (the thermal frames, read whole for their tails and telemetry, are most of
 the decompression's time; the ZED chunks it skips compress well and decompress fast).
+
+An uncompressed chunk (what rosbags writes, and rosbag2's MCAP writer where compression does not pay) needs no
+decompressing to reach a message: there each wanted message is read from the file in part (:func:`_sparse_messages`)
+when what is wanted of the chunk is less than PREFIX_FRACTION of it. A channel in ``heads`` gives its first bytes, a
+channel in ``sparse`` a :class:`Sparse` (the message's first bytes, the rest read on demand: a thermal frame's
+telemetry rows and tail at its end), the other wanted channels their whole data. The records between them are not
+read, so not checked either; every message read is checked against its message index.
 """
 from __future__ import annotations
 
 import heapq
+import io
+import os
 import struct
 
 #: record opcodes (MCAP specification)
@@ -214,9 +223,114 @@ def _prefix_messages(fh, chunk_index, wanted, heads, stats):
     return out
 
 
-def _chunk_messages(fh, chunk_index, wanted, heads, stats):
+def _pread(fh, at: int, n: int) -> bytes:
+    """Up to ``n`` bytes of ``fh`` from byte ``at``: ``os.pread`` on a file, seek and read on another stream."""
+    try:
+        fd = fh.fileno()
+    except (AttributeError, io.UnsupportedOperation):
+        fh.seek(at)
+        return fh.read(n)
+    return os.pread(fd, n, at)
+
+
+class Sparse:
+    """A message's data read in part: its first bytes (``head``), any other bytes read from the file when asked
+    (:meth:`read`), while the file is open. ``len()`` is the whole data's."""
+
+    __slots__ = ("head", "_size", "_fh", "_at", "_where")
+
+    def __init__(self, head: bytes, size: int, fh, at: int, where: str):
+        self.head, self._size, self._fh, self._at, self._where = head, size, fh, at, where
+
+    def __len__(self) -> int:
+        return self._size
+
+    def read(self, a: int, b: int) -> bytes:
+        """Bytes ``a:b`` of the message's data (0 <= a <= b <= len)."""
+        if not 0 <= a <= b <= self._size:
+            raise ScanError(f"{self._where}: bytes {a}:{b} asked of a message of {self._size}")
+        if b <= len(self.head):
+            return self.head[a:b]
+        got = _pread(self._fh, self._at + a, b - a)
+        if len(got) != b - a:
+            raise ScanError(f"{self._where}: the file ends inside the message")
+        return got
+
+
+def _records_at(fh, chunk_index, where: str) -> int:
+    """The file offset of an uncompressed chunk's records, from its header (checked against its chunk index)."""
+    head = _pread(fh, chunk_index.chunk_start_offset, RECORD_HEAD + _CHUNK.size + 4 + 8)
+    try:
+        if head[0] != OP_CHUNK:
+            raise ScanError(f"{where}: no chunk there (the file is shorter or damaged)")
+        _, _, size, _ = _CHUNK.unpack_from(head, RECORD_HEAD)
+        pos = RECORD_HEAD + _CHUNK.size
+        (n,) = _U32.unpack_from(head, pos)
+        (length,) = _U64.unpack_from(head, pos + 4 + n) if n == 0 else (-1,)
+    except (struct.error, IndexError):
+        raise ScanError(f"{where}: bad header (the file is shorter or damaged)") from None
+    if n != 0 or size != chunk_index.uncompressed_size or length != size:
+        raise ScanError(f"{where}: its header is not what its chunk index says")
+    return chunk_index.chunk_start_offset + pos + 4 + 8
+
+
+def _sparse_messages(fh, chunk_index, wanted, heads, sparse, stats):
+    """``(log_time, offset, channel, data)`` of an uncompressed chunk's wanted messages, by offset, each read from the
+    file in part: a channel in ``heads`` gives at most ``heads[channel]`` bytes of each message's data (bytes), a
+    channel in ``sparse`` a :class:`Sparse` with at most ``sparse[channel]`` bytes read, the others their whole data.
+    None where that would not save much (what is wanted is more than PREFIX_FRACTION of the records) or cannot be
+    done (a compressed chunk, no message index, no message in ``heads`` or ``sparse``)."""
+    cut = heads.keys() | sparse.keys()
+    if chunk_index.compression != "" or not cut & set(chunk_index.message_index_offsets):
+        return None
+    every = message_index(fh, chunk_index, chunk_index.message_index_offsets)
+    if every is None:
+        return None
+    size = chunk_index.uncompressed_size
+    fixed = RECORD_HEAD + _MESSAGE.size
+    bounds = [e[0] for e in every[1:]] + [size]
+    index = [(off, cid, min(b, off + fixed + heads.get(cid, sparse.get(cid, size))) - off)
+             for (off, _, cid), b in zip(every, bounds) if cid in wanted]
+    if sum(n for _, _, n in index) > PREFIX_FRACTION * size:
+        return None
+    where = f"chunk at offset {chunk_index.chunk_start_offset}"
+    at = _records_at(fh, chunk_index, where)
+    out, read = [], 0
+    for offset, cid, n in index:
+        buf = _pread(fh, at + offset, n)
+        read += len(buf)
+        try:
+            if len(buf) < fixed or buf[0] != OP_MESSAGE:
+                raise ScanError(f"{where}: no Message record at byte {offset}, where its message index says")
+            (length,) = _U64.unpack_from(buf, 1)
+            channel, _, log_time, _ = _MESSAGE.unpack_from(buf, RECORD_HEAD)
+        except struct.error:
+            raise ScanError(f"{where}: no Message record at byte {offset}, where its message index says") from None
+        end = RECORD_HEAD + length                      # the record's end, from its start
+        if channel != cid or length < _MESSAGE.size or offset + end > size:
+            raise ScanError(f"{where}: the Message record at byte {offset} is not what its message index says")
+        if cid in sparse:
+            data = Sparse(buf[fixed:min(end, n)], end - fixed, fh, at + offset + fixed, where)
+        elif cid in heads:
+            data = buf[fixed:min(end, n)]
+        else:
+            if end > n:
+                raise ScanError(f"{where}: the Message record at byte {offset} runs into the next one")
+            data = buf[fixed:end]
+        out.append((log_time, offset, cid, data))
+    stats["read_bytes"] = stats.get("read_bytes", 0) + read
+    return out
+
+
+def _chunk_messages(fh, chunk_index, wanted, heads, stats, sparse=None):
     """``(log_time, place, channel, data)`` of one chunk's wanted messages in record order (``place`` increases with
-    it), through :func:`_prefix_messages` where it applies, else by decompressing the whole chunk."""
+    it), through :func:`_sparse_messages` or :func:`_prefix_messages` where they apply, else by decompressing the
+    whole chunk. ``sparse`` ({channel: n}, see :func:`_sparse_messages`): a channel of which an uncompressed chunk
+    gives a :class:`Sparse`; a compressed one gives its whole data."""
+    if heads or sparse:
+        got = _sparse_messages(fh, chunk_index, wanted, heads, sparse or {}, stats)
+        if got is not None:
+            return got
     if heads:
         got = _prefix_messages(fh, chunk_index, wanted, heads, stats)
         if got is not None:
@@ -227,30 +341,36 @@ def _chunk_messages(fh, chunk_index, wanted, heads, stats):
     return [(t, p, ch, view[a:b]) for t, p, ch, a, b in messages(records, wanted)]
 
 
-def iter_messages(fh, summary, channel_ids, *, log_time_order: bool = True, chunks=None, heads=None, stats=None):
+def iter_messages(fh, summary, channel_ids, *, log_time_order: bool = True, chunks=None, heads=None, stats=None,
+                  sparse=None):
     """``(channel_id, log_time, data)`` of every message of the wanted channels, ``data`` a memoryview (valid while
     the caller holds it). ``chunks``: the chunk indexes to read (default: every one holding a wanted channel).
     ``heads``: {channel_id: n} for channels of which only the first ``n`` bytes of each message's data are wanted (a
     header stamp): a zstd chunk with a message index is then decompressed only up to the last byte wanted of it,
-    which skips most of a chunk of large images. ``stats``: a dict that gets ``decompressed_bytes``."""
+    which skips most of a chunk of large images; an uncompressed chunk's messages are read in part from the file.
+    ``sparse``: {channel_id: n} for channels of which an uncompressed chunk gives a :class:`Sparse` (the first ``n``
+    bytes read, the rest on demand) in place of the data. ``stats``: a dict that gets ``decompressed_bytes`` and
+    ``read_bytes`` (read in part)."""
     for log_time, _, _, channel, data in iter_keyed(fh, summary, channel_ids, log_time_order=log_time_order,
-                                                    chunks=chunks, heads=heads, stats=stats):
+                                                    chunks=chunks, heads=heads, stats=stats, sparse=sparse):
         yield channel, log_time, data
 
 
-def iter_keyed(fh, summary, channel_ids, *, log_time_order: bool = True, chunks=None, heads=None, stats=None):
+def iter_keyed(fh, summary, channel_ids, *, log_time_order: bool = True, chunks=None, heads=None, stats=None,
+               sparse=None):
     """As :func:`iter_messages`, each message as ``(log_time, chunk offset, place, channel_id, data)``: the first three
     are its place in mcap's order (log time, ties by the chunk's offset in the file, then by the record's place in its
     chunk), so that messages read from different runs of chunks merge back into that order (``heapq.merge``).
     ``summary`` is only read when ``chunks`` is None."""
     wanted = set(channel_ids)
     heads = {cid: n for cid, n in (heads or {}).items() if cid in wanted}
+    sparse = {cid: n for cid, n in (sparse or {}).items() if cid in wanted and cid not in heads}
     stats = {} if stats is None else stats
     if chunks is None:
         chunks = [c for c in summary.chunk_indexes if wanted & set(c.message_index_offsets)]
     if not log_time_order:
         for c in sorted(chunks, key=lambda c: c.chunk_start_offset):
-            for log_time, place, channel, data in _chunk_messages(fh, c, wanted, heads, stats):
+            for log_time, place, channel, data in _chunk_messages(fh, c, wanted, heads, stats, sparse):
                 yield log_time, c.chunk_start_offset, place, channel, data
         return
     # a chunk is opened when its first log time comes to the top, as in mcap's queue: (time, chunk offset, place)
@@ -259,7 +379,7 @@ def iter_keyed(fh, summary, channel_ids, *, log_time_order: bool = True, chunks=
     while heap:
         log_time, offset, place, channel, item = heapq.heappop(heap)
         if place < 0:
-            for t, p, ch, data in _chunk_messages(fh, item, wanted, heads, stats):
+            for t, p, ch, data in _chunk_messages(fh, item, wanted, heads, stats, sparse):
                 heapq.heappush(heap, (t, offset, p, ch, data))
             continue
         yield log_time, offset, place, channel, item

@@ -14,7 +14,7 @@ import pytest
 from mcap.reader import make_reader
 from mcap.writer import CompressionType
 
-from platform_tools.dataset import engines, indexscan
+from platform_tools.dataset import engines, indexscan, mcapscan
 from platform_tools.dataset.recording import RecordingError, open_recording
 from tests.dataset import rosbags_rig
 from tests.dataset.test_dataset_speed_scan import _mcap_file
@@ -179,3 +179,79 @@ def test_a_worker_that_dies_is_one_line_and_the_others_are_stopped(how):
     assert "a worker process died" in str(exc.value) and "--workers" in str(exc.value) and "\n" not in str(exc.value)
     import multiprocessing
     assert [c for c in multiprocessing.active_children() if c not in p._before] == []     # every worker reaped
+
+
+def _fields_by_whole_bytes(data, wanted: indexscan.Wanted) -> tuple:
+    """thermal_fields as it was written for a frame's whole bytes (before the frames were read in part): the reference
+    the part-read path is checked against."""
+    import hashlib
+
+    from platform_tools.boson.telemetry import TelemetryError, decode_image_data
+    from platform_tools.dataset.cdr import image_layout
+    try:
+        height, width, step, off = image_layout(data)
+    except (ValueError, IndexError, __import__("struct").error):
+        return hashlib.blake2b(data[-indexscan.TAIL_BYTES:], digest_size=16).digest(), -1, -1
+    rows = indexscan.rows_below(wanted.telemetry_rows, wanted.model_px, width, height)
+    end = off + (height - rows) * step
+    counter = ffc = -1
+    if rows:
+        try:
+            tel = decode_image_data(memoryview(data)[off:off + height * step], height, step, rows)
+            counter, ffc = int(tel.frame_counter), int(tel.ffc_status)
+        except TelemetryError:
+            pass
+    return hashlib.blake2b(data[max(off, end - indexscan.TAIL_BYTES):end], digest_size=16).digest(), counter, ffc
+
+
+@pytest.mark.parametrize("size", [(640, 514), (640, 512), (320, 258), (40, 34), (7, 3)])
+@pytest.mark.parametrize("frame_id", ["", "thermal_left_optical", "x" * 300])
+def test_a_thermal_frame_read_in_part_gives_what_its_whole_bytes_give(size, frame_id):
+    """Frames serialised by rosbags (full-size with and without telemetry rows, half-size, small ones whose tail is the
+    whole image, a frame_id longer than the fields read first), whole and cut short: the digest, frame counter and FFC
+    state read through a Sparse (fields, then one read of the tail and telemetry rows) are those of the whole bytes."""
+    from rosbags.typesys import Stores, get_typestore
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    w, h = size
+    rng = np.random.default_rng(w * h + len(frame_id))
+    px = rng.integers(0, 65535, (h, w), dtype=np.uint16)
+    if h in (514, 258, 34):          # Boson telemetry rows at the bottom, as the rig's cameras send them
+        line = rosbags_rig.telemetry_line(123456, 2, 99, 2 * w * 2)
+        px[-2:] = np.frombuffer(line, "<u2").reshape(2, w)
+    raw = bytes(ts.serialize_cdr(rosbags_rig._image(ts, 1_700_000_000_123_456_789, frame_id, px, "mono16"),
+                                 "sensor_msgs/msg/Image"))
+    wanted = indexscan.Wanted(streams={"/t": "thermal_left"}, others=frozenset(), stamps_only=frozenset(),
+                              telemetry_rows=2, model_px=(640, 512))
+    for data in (raw, raw[:max(60, len(raw) - 1000)], raw[:40]):
+        want = _fields_by_whole_bytes(data, wanted)
+        part = mcapscan.Sparse(data[:indexscan.FIELDS_BYTES], len(data), io.BytesIO(data), 0, "test")
+        assert indexscan.thermal_fields(part, wanted, {}) == want
+        assert indexscan.thermal_fields(memoryview(data), wanted, {}) == want
+        assert indexscan.event(5, 0, 0, "/t", part, wanted, {}) == (5, 0, 0, "/t", 1_700_000_000_123_456_789) + want
+    if h in (514, 258, 34) and w * h > 500:
+        assert _fields_by_whole_bytes(raw, wanted)[1:] == (123456, 2)       # non-trivial: the telemetry was read
+
+
+def test_a_rosbags_recording_read_in_part_indexes_as_through_mcaps_reader(recordings, rig, pool, monkeypatch):
+    """rosbags writes its chunks uncompressed: the index reads them in part (stamps, thermal fields, tails, telemetry;
+    the status messages whole), one process or in the pool, and gets what mcap's reader gives it reading every
+    message whole (the scan switched off)."""
+    from platform_tools.dataset import recording
+    calls = []
+    real_sparse = mcapscan._sparse_messages
+
+    def spy(*a, **k):
+        got = real_sparse(*a, **k)
+        calls.append(got is not None)
+        return got
+    monkeypatch.setattr(mcapscan, "_sparse_messages", spy)
+    one = open_recording(recordings["rosbags"], rig)
+    assert calls and all(calls)                      # every chunk of this recording was read in part
+    split = open_recording(recordings["rosbags"], rig, pool=pool)    # the workers fork with the spy: not counted
+    monkeypatch.setattr(mcapscan, "has_chunk_index", lambda summary: False)
+    recording._summaries.clear()
+    ref = open_recording(recordings["rosbags"], rig)
+    _same(one, ref)
+    _same(split, ref)
+    left = ref.streams["thermal_left"]
+    assert left.frozen.any() and (left.counter >= 0).all() and ref.status        # telemetry and status read

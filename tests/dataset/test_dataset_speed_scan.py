@@ -177,30 +177,41 @@ def test_a_rosbags_recording_indexes_and_decodes_as_through_mcaps_reader(bag, ri
 
 
 @pytest.mark.slow
-def test_a_damaged_recording_is_one_line(bag, rig, tmp_path):
+@pytest.mark.parametrize("stream", ["thermal_left", "zed_left"])
+def test_a_damaged_recording_is_one_line(bag, rig, tmp_path, stream):
+    """A message record's length damaged in an uncompressed chunk (rosbags writes them so): the index reads that
+    record in part, from its message index, and says the file is damaged, in one line. A thermal frame (read as a
+    Sparse: fields, tail, telemetry) and a ZED image (read for its stamp only)."""
     import shutil
     copy = tmp_path / "bag"
     shutil.copytree(bag, copy)
     (f,) = mcap_files(copy)[1]
-    summary = make_reader(open(f, "rb")).get_summary()
-    c = summary.chunk_indexes[len(summary.chunk_indexes) // 2]
-    assert c.compression == ""                  # rosbags writes its chunks uncompressed: the first record's length
+    with open(f, "rb") as fh:
+        summary = make_reader(fh).get_summary()
+        topic = open_recording(bag, rig).streams[stream].topic
+        cid = next(i for i, c in summary.channels.items() if c.topic == topic)
+        chunks = [c for c in summary.chunk_indexes if cid in c.message_index_offsets]
+        c = chunks[len(chunks) // 2]
+        assert c.compression == ""              # rosbags writes its chunks uncompressed
+        offset = mcapscan.message_index(fh, c, [cid])[0][0]
     raw = bytearray(f.read_bytes())
-    first = c.chunk_start_offset + 9 + 28 + 4 + 8    # Chunk header: record head, times, size, crc, "", records length
-    raw[first + 1:first + 9] = (2 ** 40).to_bytes(8, "little")
+    record = c.chunk_start_offset + 9 + 28 + 4 + 8 + offset   # Chunk header: record head, times, size, crc, "", length
+    assert raw[record] == mcapscan.OP_MESSAGE
+    raw[record + 1:record + 9] = (2 ** 40).to_bytes(8, "little")
     f.write_bytes(bytes(raw))
     recording._summaries.clear()
     with pytest.raises(RecordingError, match="damaged MCAP") as exc:
         open_recording(copy, rig)
-    assert str(f) in str(exc.value) and "\n" not in str(exc.value)
+    assert str(f) in str(exc.value) and f"chunk at offset {c.chunk_start_offset}" in str(exc.value)
+    assert "\n" not in str(exc.value)
 
 
-def _big_and_small_file(seed=1) -> bytes:
+def _big_and_small_file(seed=1, compression=CompressionType.ZSTD) -> bytes:
     """Chunks of one large compressible message (a depth map's kind) followed by small ones: what the index needs only
     the header of, and what it needs whole."""
     rng = np.random.default_rng(seed)
     buf = io.BytesIO()
-    w = Writer(buf, chunk_size=400_000, compression=CompressionType.ZSTD)
+    w = Writer(buf, chunk_size=400_000, compression=compression)
     w.start()
     sid = w.register_schema("s", "raw", b"")
     big, small = w.register_channel("/big", "raw", sid), w.register_channel("/small", "raw", sid)
@@ -232,8 +243,49 @@ def test_heads_cut_the_data_and_the_decompression_not_the_order(ordered):
     assert cut["decompressed_bytes"] < full["decompressed_bytes"] / 10
 
 
-def test_a_message_index_that_points_elsewhere_is_one_line():
-    data = bytearray(_big_and_small_file())
+@pytest.mark.parametrize("ordered", [True, False])
+@pytest.mark.parametrize("on_disk", [True, False])
+def test_an_uncompressed_chunk_is_read_in_part_and_in_mcaps_order(ordered, on_disk, tmp_path):
+    """Uncompressed chunks (mcap's writer, no compression): a channel in ``heads`` gives its first bytes, one in
+    ``sparse`` a Sparse whose every range is the message's (read from the file, os.pread, or from a stream), the
+    others their whole data; in mcap's order, reading a tenth of what a whole read does."""
+    data = _big_and_small_file(compression=CompressionType.NONE)
+    summary = make_reader(io.BytesIO(data)).get_summary()
+    assert {c.compression for c in summary.chunk_indexes} == {""} and len(summary.chunk_indexes) > 10
+    ids = {cid: c.topic for cid, c in summary.channels.items()}
+    big = next(cid for cid, t in ids.items() if t == "/big")
+    want = [(ids[c.id], m.log_time, m.data) for _, c, m in
+            make_reader(io.BytesIO(data)).iter_messages(log_time_order=ordered)]
+    f = tmp_path / "u.mcap"
+    f.write_bytes(data)
+    rng = np.random.default_rng(2)
+    for mode in ("heads", "sparse"):
+        stats = {}
+        with (open(f, "rb") if on_disk else io.BytesIO(data)) as fh:
+            got = []
+            for c, t, d in mcapscan.iter_messages(fh, summary, set(ids), log_time_order=ordered, stats=stats,
+                                                  **{mode: {big: 12}}):
+                if isinstance(d, mcapscan.Sparse):
+                    assert mode == "sparse" and c == big
+                    whole = want[len(got)][2]
+                    assert len(d) == len(whole) and d.head == whole[:12]
+                    for a, b in [(0, 5), (0, len(whole)), (len(whole) - 9, len(whole))] + [
+                            tuple(sorted(rng.integers(0, len(whole) + 1, 2))) for _ in range(3)]:
+                        assert d.read(int(a), int(b)) == whole[a:b]
+                    with pytest.raises(mcapscan.ScanError, match="bytes 0:"):
+                        d.read(0, len(whole) + 1)
+                    d = whole
+                else:
+                    assert c != big or mode == "heads"
+                    d = bytes(d)
+                got.append((ids[c], t, d[:12] if (c == big and mode == "heads") else d))
+        assert got == [(t, log, d[:12] if (t == "/big" and mode == "heads") else d) for t, log, d in want]
+        assert len(got) == 80 and 0 < stats["read_bytes"] + stats.get("decompressed_bytes", 0) < len(data) / 10
+
+
+@pytest.mark.parametrize("compression", [CompressionType.ZSTD, CompressionType.NONE])
+def test_a_message_index_that_points_elsewhere_is_one_line(compression):
+    data = bytearray(_big_and_small_file(compression=compression))
     summary = make_reader(io.BytesIO(bytes(data))).get_summary()
     ids = {cid: c.topic for cid, c in summary.channels.items()}
     big = next(cid for cid, t in ids.items() if t == "/big")
