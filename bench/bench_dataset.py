@@ -23,8 +23,11 @@
    ``platform_tools simulate-rig --out DIR --duration 12 --scale 1`` (``--duration 60`` for the steady state).
 
 One core for 1 and 2: numba, OpenCV and BLAS are pinned to one thread before they load.
+``--cold`` evicts the recording's files from the page cache before each timed run (``posix_fadvise``, no root
+needed): the export then reads them from the disk, as it does a recording larger than the free memory.
+
 Run: .venv/bin/python bench/bench_dataset.py [--frames N] [--json] [--export RECORDING [--rate HZ] [--repeats N]
-     [--spawn] [--fork]]
+     [--spawn] [--fork] [--cold]]
 """
 from __future__ import annotations
 
@@ -154,6 +157,27 @@ def compare_outputs(a: Path, b: Path) -> dict:
     return res
 
 
+def evict(recording: Path) -> int | None:
+    """Drop the recording's files from the page cache (``posix_fadvise(POSIX_FADV_DONTNEED)``: no root needed; the
+    files are clean, long written), so that the next export reads them from the disk, as it does a recording larger
+    than the free memory or read days after it was copied. The bytes of them still cached after it, as util-linux's
+    ``fincore`` counts them (None without fincore)."""
+    import shutil
+    import subprocess
+    files = [f for f in Path(recording).rglob("*") if f.is_file()]
+    for f in files:
+        fd = os.open(f, os.O_RDONLY)
+        try:
+            os.posix_fadvise(fd, 0, 0, os.POSIX_FADV_DONTNEED)
+        finally:
+            os.close(fd)
+    if not shutil.which("fincore"):
+        return None
+    out = subprocess.run(["fincore", "--bytes", "--noheadings", "--raw", "--output", "RES", *map(str, files)],
+                         capture_output=True, text=True, check=True).stdout
+    return sum(int(x) for x in out.split())
+
+
 #: how this tree's export starts its workers (platform_tools.dataset.engines.START_ENV): "new-spawn" by --spawn,
 #: "new-fork" by --fork; unset for "new" and for the previous trees
 FORK_ENV = "PLATFORM_TOOLS_EXPORT_WORKERS"
@@ -165,9 +189,10 @@ WARM_UP_RATE_HZ = 0.25
 
 
 def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, revs=(BASELINE,),
-                 fork: bool = False, spawn: bool = False) -> dict:
+                 fork: bool = False, spawn: bool = False, cold: bool = False) -> dict:
     """``spawn`` / ``fork``: this tree a second time with its workers spawned ("new-spawn") / forked ("new-fork"),
-    each run beside the others."""
+    each run beside the others. ``cold``: the recording evicted from the page cache before each timed run
+    (:func:`evict`)."""
     import tempfile
     with tempfile.TemporaryDirectory(prefix="bench-export-") as tmp:
         tmp = Path(tmp)
@@ -182,8 +207,11 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
         cpu = {n: [] for n in trees}
         loads = {n: [] for n in trees}
         samples = {}
+        resident = []
         for _ in range(repeats):
             for name, (tree, env) in trees.items():
+                if cold:
+                    resident.append(evict(recording))
                 dt, samples[name], c, load = run_export(tree, recording, tmp / f"out-{name}", rate, workers, env)
                 times[name].append(dt)
                 cpu[name].append(c)
@@ -191,6 +219,7 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
         sps = {n: samples[n] / min(t) for n, t in times.items()}
         ours = [n for n in trees if n.startswith("new")]
         return {"recording": str(recording), "rate_hz": rate, "workers": workers, "samples": samples,
+                "cold": cold, "resident_bytes_at_start": resident,
                 "seconds": times, "samples_per_s": sps, "cpu_seconds": cpu, "load_average": loads,
                 "ratio": {f"{n} / {rev}": sps[n] / sps[rev] for n in ours for rev in revs},
                 "cpu_ratio": {f"{n} / {rev}": min(cpu[rev]) * samples[n] / (min(cpu[n]) * samples[rev])
@@ -212,16 +241,24 @@ def main(argv=None) -> int:
                     help=f"with --export: also this tree with its workers forked ({FORK_ENV}=fork), as new-fork")
     ap.add_argument("--spawn", action="store_true",
                     help=f"with --export: also this tree with its workers spawned ({FORK_ENV}=spawn), as new-spawn")
+    ap.add_argument("--cold", action="store_true",
+                    help="with --export: the recording evicted from the page cache before each timed run (read from "
+                         "the disk, as a recording larger than the free memory is)")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     if args.export:
         r = bench_export(args.export, args.rate, args.repeats, revs=tuple(args.previous or (BASELINE,)),
-                         fork=args.fork, spawn=args.spawn)
+                         fork=args.fork, spawn=args.spawn, cold=args.cold)
         if args.json:
             print(json.dumps(r, indent=2))
             return 0
+        cold = ""
+        if r["cold"]:
+            known = [b for b in r["resident_bytes_at_start"] if b is not None]
+            cold = (", the recording evicted from the page cache before each run" +
+                    (f" (at most {max(known) / 1e6:.1f} MB of it still cached, fincore)" if known else ""))
         print(f"export of {r['recording']} at {r['rate_hz']:g} Hz, {r['workers']} workers, best of "
-              f"{len(r['seconds']['new'])}:")
+              f"{len(r['seconds']['new'])}{cold}:")
         for n in r["seconds"]:
             print(f"  {n:<10} {r['samples'][n]:>5} samples in {min(r['seconds'][n]):7.1f} s: "
                   f"{r['samples_per_s'][n]:6.2f} samples/s  (runs: {', '.join(f'{t:.1f}' for t in r['seconds'][n])} s;"

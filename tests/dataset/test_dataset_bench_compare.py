@@ -29,3 +29,30 @@ def test_a_png_and_the_jpeg_it_was_decoded_from_compare_by_pixels(tmp_path):
     assert got["same_pixels_as_jpeg"] == ["rec/zed_left/000000.jpg"]
     assert got["different"] == ["rec/zed_left/000001.jpg"]
     assert got["only_in_previous"] == ["rec/zed_left/000002.png"] and got["only_in_new"] == []
+
+
+def test_cold_runs_start_with_the_recording_out_of_the_page_cache(tmp_path):
+    """--cold: evict() drops a recording's files from the page cache; util-linux's fincore (read back here on its
+    own, not through evict's count) says none of their bytes are cached after it, where they all were before."""
+    import os
+    import shutil
+    import subprocess
+    if not shutil.which("fincore"):
+        import pytest
+        pytest.skip("util-linux's fincore is not installed")
+    rec = tmp_path / "rec" / "bag"
+    rec.mkdir(parents=True)
+    for k in range(2):
+        with open(rec / f"bag_{k}.mcap", "wb") as f:
+            f.write(os.urandom(4 << 20))
+            f.flush()
+            os.fsync(f.fileno())                  # clean pages: what a long-written recording's are
+        (rec / f"bag_{k}.mcap").read_bytes()
+
+    def cached() -> int:
+        out = subprocess.run(["fincore", "--bytes", "--noheadings", "--raw", "--output", "RES",
+                              *map(str, sorted(rec.iterdir()))], capture_output=True, text=True, check=True).stdout
+        return sum(int(x) for x in out.split())
+    assert cached() >= 8 << 20
+    assert _bench().evict(tmp_path / "rec") == 0
+    assert cached() == 0
