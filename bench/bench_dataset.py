@@ -23,8 +23,9 @@
    ``platform_tools simulate-rig --out DIR --duration 12 --scale 1`` (``--duration 60`` for the steady state).
 
 One core for 1 and 2: numba, OpenCV and BLAS are pinned to one thread before they load.
-``--cold`` evicts the recording's files from the page cache before each timed run (``posix_fadvise``, no root
-needed): the export then reads them from the disk, as it does a recording larger than the free memory.
+Before each timed run the recording's files are read once (into the page cache, whatever the machine let go since
+the last run); ``--cold`` evicts them instead (``posix_fadvise``, no root needed): the export then reads them from
+the disk, as it does a recording larger than the free memory.
 
 Run: .venv/bin/python bench/bench_dataset.py [--frames N] [--json] [--export RECORDING [--rate HZ] [--repeats N]
      [--spawn] [--fork] [--cold]]
@@ -160,10 +161,8 @@ def compare_outputs(a: Path, b: Path) -> dict:
 def evict(recording: Path) -> int | None:
     """Drop the recording's files from the page cache (``posix_fadvise(POSIX_FADV_DONTNEED)``: no root needed; the
     files are clean, long written), so that the next export reads them from the disk, as it does a recording larger
-    than the free memory or read days after it was copied. The bytes of them still cached after it, as util-linux's
-    ``fincore`` counts them (None without fincore)."""
-    import shutil
-    import subprocess
+    than the free memory or read days after it was copied. The bytes of them still cached after it
+    (:func:`_cached`)."""
     files = [f for f in Path(recording).rglob("*") if f.is_file()]
     for f in files:
         fd = os.open(f, os.O_RDONLY)
@@ -171,6 +170,25 @@ def evict(recording: Path) -> int | None:
             os.posix_fadvise(fd, 0, 0, os.POSIX_FADV_DONTNEED)
         finally:
             os.close(fd)
+    return _cached(files)
+
+
+def preload(recording: Path) -> int | None:
+    """Read the recording's files once, so that the next export finds them in the page cache (what the runs without
+    ``--cold`` measure: the machine may have let part of them go since the last run, and the tree that reads more of
+    the file would pay for it). The bytes of them cached after it (:func:`_cached`)."""
+    files = [f for f in Path(recording).rglob("*") if f.is_file()]
+    for f in files:
+        with open(f, "rb", buffering=0) as fh:
+            while fh.read(8 << 20):
+                pass
+    return _cached(files)
+
+
+def _cached(files) -> int | None:
+    """The bytes of ``files`` in the page cache, as util-linux's fincore counts them (None without fincore)."""
+    import shutil
+    import subprocess
     if not shutil.which("fincore"):
         return None
     out = subprocess.run(["fincore", "--bytes", "--noheadings", "--raw", "--output", "RES", *map(str, files)],
@@ -210,8 +228,7 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
         resident = []
         for _ in range(repeats):
             for name, (tree, env) in trees.items():
-                if cold:
-                    resident.append(evict(recording))
+                resident.append(evict(recording) if cold else preload(recording))
                 dt, samples[name], c, load = run_export(tree, recording, tmp / f"out-{name}", rate, workers, env)
                 times[name].append(dt)
                 cpu[name].append(c)
@@ -242,7 +259,8 @@ def main(argv=None) -> int:
     ap.add_argument("--spawn", action="store_true",
                     help=f"with --export: also this tree with its workers spawned ({FORK_ENV}=spawn), as new-spawn")
     ap.add_argument("--cold", action="store_true",
-                    help="with --export: the recording evicted from the page cache before each timed run (read from "
+                    help="with --export: the recording evicted from the page cache before each timed run, not read "
+                         "into it (read from "
                          "the disk, as a recording larger than the free memory is)")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
@@ -252,11 +270,14 @@ def main(argv=None) -> int:
         if args.json:
             print(json.dumps(r, indent=2))
             return 0
-        cold = ""
+        known = [b for b in r["resident_bytes_at_start"] if b is not None]
+        size = sum(f.stat().st_size for f in Path(r["recording"]).rglob("*") if f.is_file())
         if r["cold"]:
-            known = [b for b in r["resident_bytes_at_start"] if b is not None]
             cold = (", the recording evicted from the page cache before each run" +
                     (f" (at most {max(known) / 1e6:.1f} MB of it still cached, fincore)" if known else ""))
+        else:
+            cold = (", the recording read into the page cache before each run" +
+                    (f" (at least {min(known) / 1e6:.0f} of its {size / 1e6:.0f} MB cached, fincore)" if known else ""))
         print(f"export of {r['recording']} at {r['rate_hz']:g} Hz, {r['workers']} workers, best of "
               f"{len(r['seconds']['new'])}{cold}:")
         for n in r["seconds"]:

@@ -31,9 +31,10 @@ def test_a_png_and_the_jpeg_it_was_decoded_from_compare_by_pixels(tmp_path):
     assert got["only_in_previous"] == ["rec/zed_left/000002.png"] and got["only_in_new"] == []
 
 
-def test_cold_runs_start_with_the_recording_out_of_the_page_cache(tmp_path):
+def test_cold_runs_start_with_the_recording_out_of_the_page_cache_and_warm_ones_in_it(tmp_path):
     """--cold: evict() drops a recording's files from the page cache; util-linux's fincore (read back here on its
-    own, not through evict's count) says none of their bytes are cached after it, where they all were before."""
+    own, not through evict's count) says none of their bytes are cached after it, where they all were before; and
+    preload() (the runs without --cold) has them all cached again."""
     import os
     import shutil
     import subprocess
@@ -56,3 +57,4 @@ def test_cold_runs_start_with_the_recording_out_of_the_page_cache(tmp_path):
     assert cached() >= 8 << 20
     assert _bench().evict(tmp_path / "rec") == 0
     assert cached() == 0
+    assert _bench().preload(tmp_path / "rec") == 8 << 20 == cached()        # the runs without --cold: all cached
