@@ -255,3 +255,25 @@ def test_a_rosbags_recording_read_in_part_indexes_as_through_mcaps_reader(record
     _same(split, ref)
     left = ref.streams["thermal_left"]
     assert left.frozen.any() and (left.counter >= 0).all() and ref.status        # telemetry and status read
+
+
+@pytest.mark.parametrize("zstd", [False, True])
+def test_a_recording_copied_by_rosbags_indexes_as_the_original(sim, rig, pool, tmp_path, zstd):
+    """bench/rosbags_copy.py (the export bench's second source): the simulated recording written again by rosbags'
+    writer, in its own chunks, uncompressed (read in part) or zstd (read whole): the same index, one process and in
+    the pool; the copy refuses to overwrite, in one line, exit 2."""
+    from tests.conftest import bench_module
+    copier = bench_module("rosbags_copy")
+    out = tmp_path / "copy"
+    assert copier.copy(sim[0], out, zstd=zstd) > 500
+    from mcap.reader import make_reader
+    (f,) = (out / "bag").glob("*.mcap")
+    with open(f, "rb") as fh:
+        compressions = {c.compression for c in make_reader(fh).get_summary().chunk_indexes}
+    assert compressions == ({"zstd"} if zstd else {""})
+    ref = open_recording(sim[0], rig)
+    _same(open_recording(out, rig), ref)
+    _same(open_recording(out, rig, pool=pool), ref)
+    assert (out / "truth.json").read_bytes() == (sim[0] / "truth.json").read_bytes()
+    before = f.read_bytes()
+    assert copier.main([str(sim[0]), str(out)]) == 2 and f.read_bytes() == before
