@@ -10,9 +10,9 @@ fields, then one read of the rows holding its tail and its telemetry rows; a ZED
 
 Why in parts: from a compressed chunk the thermal frames are read whole (their tails and telemetry rows end them),
 and decompressing them is most of an index's time (2.75 of 4.6 s of CPU on this project's simulated 60 s
-full-size recording, docs/dataset.md "Speed"), while the export's workers would wait for the plan. Every event carries its place in
-mcap's order (:func:`.mcapscan.iter_keyed`), so the parts merge back into the order one scan reads: the index is
-the same however the chunks were split (tests/dataset/test_dataset_indexscan.py).
+full-size recording, docs/dataset.md "Speed"), while the export's workers would wait for the plan. Every event
+carries its place in mcap's order (:func:`.mcapscan.iter_keyed`), so the parts merge back into the order one scan
+reads: the index is the same however the chunks were split (tests/dataset/test_dataset_indexscan.py).
 """
 from __future__ import annotations
 
