@@ -45,6 +45,8 @@ _U32 = struct.Struct("<I")
 _CHUNK = struct.Struct("<QQQI")
 #: a MessageIndex record's fixed fields: channel_id u16, then the byte length u32 of its (log_time u64, offset u64) pairs
 _MESSAGE_INDEX = struct.Struct("<HI")
+#: a Message record's bytes before its data
+MESSAGE_HEAD = RECORD_HEAD + _MESSAGE.size
 
 
 class ScanError(ValueError):
@@ -116,7 +118,7 @@ def messages(records: bytes, channel_ids) -> list[tuple[int, int, int, int, int]
             if records[pos] == OP_MESSAGE:
                 channel, _, log_time, _ = _MESSAGE.unpack_from(records, pos + RECORD_HEAD)
                 if channel in channel_ids:
-                    start = pos + RECORD_HEAD + _MESSAGE.size
+                    start = pos + MESSAGE_HEAD
                     out.append((log_time, place, channel, start, pos + RECORD_HEAD + length))
             pos += RECORD_HEAD + length
             place += 1
@@ -159,6 +161,30 @@ def message_index(fh, chunk_index, channel_ids) -> list[tuple[int, int, int]] | 
 PREFIX_FRACTION = 0.5
 
 
+def _wanted_ends(every, size: int, wanted, cut: dict) -> list[tuple[int, int, int]]:
+    """``(offset, channel_id, end)`` of each wanted message of a chunk, by offset (``every``: the chunk's message
+    index, every channel's; ``size``: its records' bytes): ``end``, where what is wanted of the message ends at most,
+    is after its first ``cut[channel]`` bytes of data, or the next message's start (or the records' end)."""
+    bounds = [e[0] for e in every[1:]] + [size]
+    return [(off, cid, min(b, off + MESSAGE_HEAD + cut[cid]) if cid in cut else b)
+            for (off, _, cid), b in zip(every, bounds) if cid in wanted]
+
+
+def _message_head(buf, pos: int, offset: int, cid: int, where: str) -> tuple[int, int]:
+    """(record length, log time) of the Message record at ``buf[pos:]``, checked to be channel ``cid``'s, as the
+    chunk's message index says (which puts it at byte ``offset`` of the records)."""
+    try:
+        if buf[pos] != OP_MESSAGE:
+            raise IndexError
+        (length,) = _U64.unpack_from(buf, pos + 1)
+        channel, _, log_time, _ = _MESSAGE.unpack_from(buf, pos + RECORD_HEAD)
+    except (struct.error, IndexError):
+        raise ScanError(f"{where}: no Message record at byte {offset}, where its message index says") from None
+    if channel != cid:
+        raise ScanError(f"{where}: the Message record at byte {offset} is not what its message index says")
+    return length, log_time
+
+
 class _Prefix:
     """The first ``n`` bytes of a zstd chunk's records, decompressed only as far as they are asked for (:meth:`upto`)
     into one buffer the messages are views of."""
@@ -194,28 +220,24 @@ def _prefix_messages(fh, chunk_index, wanted, heads, stats):
     if every is None:
         return None
     size = chunk_index.uncompressed_size
-    # where each wanted message ends at most: its head, or the next message's start (or the records' end)
-    bounds = [e[0] for e in every[1:]] + [size]
-    index = [(e, b) for e, b in zip(every, bounds) if e[2] in wanted]
-    need = max((min(b, off + RECORD_HEAD + _MESSAGE.size + heads[cid]) if cid in heads else b)
-               for (off, _, cid), b in index)
+    index = _wanted_ends(every, size, wanted, heads)
+    need = max(end for _, _, end in index)
     if need > PREFIX_FRACTION * size:
         return None
     _, data, _ = _chunk_records(fh, chunk_index)
     where = f"chunk at offset {chunk_index.chunk_start_offset}"
     prefix = _Prefix(data, need, where)
     out = []
-    for (offset, _, cid), _ in index:
-        start = offset + RECORD_HEAD + _MESSAGE.size
+    for offset, cid, _ in index:
+        start = offset + MESSAGE_HEAD
         prefix.upto(start)
-        if start > need or prefix.buf[offset] != OP_MESSAGE:
+        if start > need:
             raise ScanError(f"{where}: no Message record at byte {offset}, where its message index says")
-        (length,) = _U64.unpack_from(prefix.buf, offset + 1)
-        channel, _, log_time, _ = _MESSAGE.unpack_from(prefix.buf, offset + RECORD_HEAD)
+        length, log_time = _message_head(prefix.buf, offset, offset, cid, where)
         end = offset + RECORD_HEAD + length
         if cid in heads:
             end = min(end, start + heads[cid])
-        if channel != cid or end > need:
+        if end > need:
             raise ScanError(f"{where}: the Message record at byte {offset} is not what its message index says")
         prefix.upto(end)
         out.append((log_time, offset, cid, prefix.buf[start:end]))
@@ -260,13 +282,13 @@ class Sparse:
 def _records_at(fh, chunk_index, where: str) -> int:
     """The file offset of an uncompressed chunk's records, from its header (checked against its chunk index)."""
     head = _pread(fh, chunk_index.chunk_start_offset, RECORD_HEAD + _CHUNK.size + 4 + 8)
+    pos = RECORD_HEAD + _CHUNK.size                 # then the compression's name (empty: u32 0), the records' length
     try:
         if head[0] != OP_CHUNK:
             raise ScanError(f"{where}: no chunk there (the file is shorter or damaged)")
         _, _, size, _ = _CHUNK.unpack_from(head, RECORD_HEAD)
-        pos = RECORD_HEAD + _CHUNK.size
         (n,) = _U32.unpack_from(head, pos)
-        (length,) = _U64.unpack_from(head, pos + 4 + n) if n == 0 else (-1,)
+        (length,) = _U64.unpack_from(head, pos + 4)
     except (struct.error, IndexError):
         raise ScanError(f"{where}: bad header (the file is shorter or damaged)") from None
     if n != 0 or size != chunk_index.uncompressed_size or length != size:
@@ -287,36 +309,28 @@ def _sparse_messages(fh, chunk_index, wanted, heads, sparse, stats):
     if every is None:
         return None
     size = chunk_index.uncompressed_size
-    fixed = RECORD_HEAD + _MESSAGE.size
-    bounds = [e[0] for e in every[1:]] + [size]
-    index = [(off, cid, min(b, off + fixed + heads.get(cid, sparse.get(cid, size))) - off)
-             for (off, _, cid), b in zip(every, bounds) if cid in wanted]
-    if sum(n for _, _, n in index) > PREFIX_FRACTION * size:
+    index = _wanted_ends(every, size, wanted, heads | sparse)
+    if sum(end - off for off, _, end in index) > PREFIX_FRACTION * size:
         return None
     where = f"chunk at offset {chunk_index.chunk_start_offset}"
     at = _records_at(fh, chunk_index, where)
     out, read = [], 0
-    for offset, cid, n in index:
+    for offset, cid, upto in index:
+        n = upto - offset
         buf = _pread(fh, at + offset, n)
         read += len(buf)
-        try:
-            if len(buf) < fixed or buf[0] != OP_MESSAGE:
-                raise ScanError(f"{where}: no Message record at byte {offset}, where its message index says")
-            (length,) = _U64.unpack_from(buf, 1)
-            channel, _, log_time, _ = _MESSAGE.unpack_from(buf, RECORD_HEAD)
-        except struct.error:
-            raise ScanError(f"{where}: no Message record at byte {offset}, where its message index says") from None
+        length, log_time = _message_head(buf, 0, offset, cid, where)
         end = RECORD_HEAD + length                      # the record's end, from its start
-        if channel != cid or length < _MESSAGE.size or offset + end > size:
+        if length < _MESSAGE.size or offset + end > size:
             raise ScanError(f"{where}: the Message record at byte {offset} is not what its message index says")
         if cid in sparse:
-            data = Sparse(buf[fixed:min(end, n)], end - fixed, fh, at + offset + fixed, where)
+            data = Sparse(buf[MESSAGE_HEAD:min(end, n)], end - MESSAGE_HEAD, fh, at + offset + MESSAGE_HEAD, where)
         elif cid in heads:
-            data = buf[fixed:min(end, n)]
+            data = buf[MESSAGE_HEAD:min(end, n)]
         else:
             if end > n:
                 raise ScanError(f"{where}: the Message record at byte {offset} runs into the next one")
-            data = buf[fixed:end]
+            data = buf[MESSAGE_HEAD:end]
         out.append((log_time, offset, cid, data))
     stats["read_bytes"] = stats.get("read_bytes", 0) + read
     return out

@@ -204,31 +204,41 @@ def _fields_by_whole_bytes(data, wanted: indexscan.Wanted) -> tuple:
     return hashlib.blake2b(data[max(off, end - indexscan.TAIL_BYTES):end], digest_size=16).digest(), counter, ffc
 
 
-@pytest.mark.parametrize("size", [(640, 514), (640, 512), (320, 258), (40, 34), (7, 3)])
+#: frame sizes as (divisor of the camera's width and height, telemetry rows below or not); None: a 7 x 3 frame
+FRAMES = {"full, telemetry": (1, True), "full": (1, False), "half, telemetry": (2, True),
+          "sixteenth, telemetry": (16, True), "tiny": None}
+
+
+@pytest.mark.parametrize("frame", sorted(FRAMES))
 @pytest.mark.parametrize("frame_id", ["", "thermal_left_optical", "x" * 300])
-def test_a_thermal_frame_read_in_part_gives_what_its_whole_bytes_give(size, frame_id):
-    """Frames serialised by rosbags (full-size with and without telemetry rows, half-size, small ones whose tail is the
-    whole image, a frame_id longer than the fields read first), whole and cut short: the digest, frame counter and FFC
-    state read through a Sparse (fields, then one read of the tail and telemetry rows) are those of the whole bytes."""
+def test_a_thermal_frame_read_in_part_gives_what_its_whole_bytes_give(frame, frame_id, rig):
+    """Frames serialised by rosbags (the rig's camera size with and without its telemetry rows, half and a sixteenth
+    of it, whose tail is the whole image, and a tiny one; a frame_id longer than the fields read first), whole and cut
+    short: the digest, frame counter and FFC state read through a Sparse (fields, then one read of the tail and
+    telemetry rows) are those of the whole bytes."""
     from rosbags.typesys import Stores, get_typestore
+
+    from platform_tools.dataset.recording import _thermal_px
     ts = get_typestore(Stores.ROS2_HUMBLE)
-    w, h = size
+    rows, (cam_w, cam_h) = rig.desc.on_device.thermal_telemetry_rows, _thermal_px(rig)
+    telemetry = FRAMES[frame] is not None and FRAMES[frame][1]
+    w, h = (7, 3) if FRAMES[frame] is None else (cam_w // FRAMES[frame][0], cam_h // FRAMES[frame][0])
     rng = np.random.default_rng(w * h + len(frame_id))
-    px = rng.integers(0, 65535, (h, w), dtype=np.uint16)
-    if h in (514, 258, 34):          # Boson telemetry rows at the bottom, as the rig's cameras send them
-        line = rosbags_rig.telemetry_line(123456, 2, 99, 2 * w * 2)
-        px[-2:] = np.frombuffer(line, "<u2").reshape(2, w)
+    px = rng.integers(0, 65535, (h + rows * telemetry, w), dtype=np.uint16)
+    if telemetry:                    # Boson telemetry rows at the bottom, as the rig's cameras send them
+        line = rosbags_rig.telemetry_line(123456, 2, 99, rows * w * 2)
+        px[-rows:] = np.frombuffer(line, "<u2").reshape(rows, w)
     raw = bytes(ts.serialize_cdr(rosbags_rig._image(ts, 1_700_000_000_123_456_789, frame_id, px, "mono16"),
                                  "sensor_msgs/msg/Image"))
     wanted = indexscan.Wanted(streams={"/t": "thermal_left"}, others=frozenset(), stamps_only=frozenset(),
-                              telemetry_rows=2, model_px=(640, 512))
+                              telemetry_rows=rows, model_px=(cam_w, cam_h))
     for data in (raw, raw[:max(60, len(raw) - 1000)], raw[:40]):
         want = _fields_by_whole_bytes(data, wanted)
         part = mcapscan.Sparse(data[:indexscan.FIELDS_BYTES], len(data), io.BytesIO(data), 0, "test")
         assert indexscan.thermal_fields(part, wanted, {}) == want
         assert indexscan.thermal_fields(memoryview(data), wanted, {}) == want
         assert indexscan.event(5, 0, 0, "/t", part, wanted, {}) == (5, 0, 0, "/t", 1_700_000_000_123_456_789) + want
-    if h in (514, 258, 34) and w * h > 500:
+    if telemetry:
         assert _fields_by_whole_bytes(raw, wanted)[1:] == (123456, 2)       # non-trivial: the telemetry was read
 
 
