@@ -121,11 +121,43 @@ def _differences(old: dict, new: dict) -> list[str]:
     return diffs or ["format"]
 
 
-def _chunk_complete(out: Path, marker: Path) -> bool:
-    """A chunk is done when its marker reads and every image it lists is still there."""
+def chunk_spans(n: int, size: int) -> list[tuple[int, int]]:
+    """The ``[start, end)`` sample ranges of one recording's chunks: ``size`` samples each, but the last ones halve
+    (``size // 2`` twice, ``size // 4`` twice, ... one sample twice) and the first takes what is left over. The pool
+    hands chunks out in this order, so the workers' last chunks are small and end close together: with chunks of
+    8 samples all alike, one worker sat idle for up to a chunk (0.6 s of a 14 s export measured, docs/dataset.md
+    "Speed"). A function of ``n`` and ``size`` only, both in the export's fingerprint, so a resumed export cuts its
+    chunks as the first run did."""
+    if n < 1:
+        return []
+    tail, piece = [], size // 2
+    while piece >= 1:
+        tail += [piece, piece]
+        piece //= 2
+    sizes, left = [], n                         # built from the end: the smallest pieces last
+    for piece in reversed(tail):
+        if not left:
+            break
+        sizes.append(min(piece, left))
+        left -= sizes[-1]
+    while left:
+        sizes.append(min(size, left))
+        left -= sizes[-1]
+    spans, start = [], 0
+    for k in reversed(sizes):
+        spans.append((start, start + k))
+        start += k
+    return spans
+
+
+def _chunk_complete(out: Path, marker: Path, samples: list[int]) -> bool:
+    """A chunk is done when its marker reads, holds the rows of exactly its task's ``samples`` (a marker an export cut
+    otherwise wrote is redone, not taken for this chunk), and every image it lists is still there."""
     try:
         rows = json.loads(marker.read_text())
     except (OSError, json.JSONDecodeError):
+        return False
+    if not isinstance(rows, list) or [r.get("sample") if isinstance(r, dict) else None for r in rows] != samples:
         return False
     return all((out / v).is_file() for r in rows for k, v in r.items() if k.endswith(FILE_COLUMNS) and v)
 
@@ -274,9 +306,9 @@ def _export(recordings, out, rig, params, *, calibration, engine, workers, sched
                                         "calibration": {"source": cal.source, "sha256": cal.sha256}})
         topics = {s: rec.streams[s].topic for s in IMAGE_STREAMS if s != "zed_depth" or recorded_depth}
         chunks = []
-        for c0 in range(0, len(pl.pairs), params.chunk_size):
-            pairs = [asdict(p) for p in pl.pairs[c0:c0 + params.chunk_size]]
-            chunks.append({"id": f"{rec.name}-{c0 // params.chunk_size:05d}", "recording": rec.name,
+        for k, (c0, c1) in enumerate(chunk_spans(len(pl.pairs), params.chunk_size)):
+            pairs = [asdict(p) for p in pl.pairs[c0:c1]]
+            chunks.append({"id": f"{rec.name}-{k:05d}", "recording": rec.name,
                            "files": [str(f.resolve()) for f in rec.files], "topics": topics, "pairs": pairs,
                            "cams": {n: model_to_dict(m) for n, m in cams.items()},
                            "thermal_height": th_h, "params": asdict(params), "out": str(out.resolve()),
@@ -294,8 +326,9 @@ def _export(recordings, out, rig, params, *, calibration, engine, workers, sched
     out.mkdir(parents=True, exist_ok=True)
     (out / CHUNKS).mkdir(exist_ok=True)
     tasks = [t for ch in tasks_by_rec for t in ch]
-    done = {p.stem for p in (out / CHUNKS).glob("*.json") if _chunk_complete(out, p)}
-    todo = [t for t in tasks if t["id"] not in done]
+    todo = [t for t in tasks if not _chunk_complete(out, out / CHUNKS / f"{t['id']}.json",
+                                                    [p["sample"] for p in t["pairs"]])]
+    done = {t["id"] for t in tasks} - {t["id"] for t in todo}
     models = (cals[0].to_dict() if len({c.sha256 for c in cals}) == 1
               else {"per_recording": {r.name: c.to_dict() for r, c in zip(recs, cals)}})
     manifest |= {"status": "running", "calibration_models": models,

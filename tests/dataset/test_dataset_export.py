@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from platform_tools.dataset import thermal8
-from platform_tools.dataset.export import ExportError, Params, export
+from platform_tools.dataset.export import ExportError, Params, chunk_spans, export
 from platform_tools.sim import geometry
 
 #: every test exports a simulated recording: the quick loop (make test-fast) leaves them to make test
@@ -113,6 +113,29 @@ def test_interrupted_export_resumes(done, sim, rig, tmp_path):
     assert not (out / "index.csv").exists()
     s = export([sim[0]], out, rig, Params.from_rig(rig, chunk_size=2), engine="inline")
     assert s["resumed"] and s["chunks_run"] == s["chunks"] - 1
+    assert (out / "index.csv").read_text() == (done[0] / "index.csv").read_text()
+
+
+def test_markers_of_another_chunk_cutting_are_redone_not_taken(done, sim, rig, tmp_path):
+    """An export begun by code that cut its chunks otherwise (every chunk 2 samples, before export.chunk_spans halved
+    the last ones) resumes with each sample once: a marker is taken only when it holds exactly its chunk's samples."""
+    out = tmp_path / "ds"
+    shutil.copytree(done[0], out)
+    (out / "index.csv").unlink()
+    by_sample = {}
+    for marker in sorted((out / ".chunks").glob("*.json")):
+        by_sample |= {row["sample"]: row for row in json.loads(marker.read_text())}
+        marker.unlink()
+    samples = sorted(by_sample)
+    new = [samples[a:b] for a, b in chunk_spans(len(samples), 2)]
+    rest = samples[len(new[0]):]
+    old = [new[0]] + [rest[i:i + 2] for i in range(0, len(rest), 2)]   # the first chunk alike, then 2, 2, ... (or 1)
+    for k, group in enumerate(old):
+        (out / ".chunks" / f"{sim[0].name}-{k:05d}.json").write_text(json.dumps([by_sample[s] for s in group]))
+    taken = sum(1 for k, group in enumerate(new) if k < len(old) and old[k] == group)
+    assert new != old and 0 < taken < len(new)                            # some markers fit their chunk, some not
+    s = export([sim[0]], out, rig, Params.from_rig(rig, chunk_size=2), engine="inline")
+    assert s["resumed"] and s["chunks"] == len(new) and s["chunks_run"] == len(new) - taken
     assert (out / "index.csv").read_text() == (done[0] / "index.csv").read_text()
 
 
