@@ -46,6 +46,14 @@ def check_type(schema_name: str) -> str:
     return t
 
 
+def decode(type_name: str, data):
+    """One CDR-serialised status message of type ``type_name`` (:func:`check_type`'s), read by :mod:`.cdr` (the
+    fields :func:`rows` and :func:`clock_step_values` read, as mcap_ros2's decoder gives them); ValueError when it is
+    cut short."""
+    from .cdr import bool_message, diagnostic_array
+    return bool_message(data) if type_name == BOOL else diagnostic_array(data)
+
+
 def rows(type_name: str, msg, log_ns: int, last_frame_stamp: int | None) -> list[tuple[int, int]]:
     """The ``(stamp ns, ffc_status)`` rows of one decoded status message of type ``type_name``
     (:func:`check_type`'s)."""

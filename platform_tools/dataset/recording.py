@@ -303,7 +303,7 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
     clock_steps: dict[str, dict[int, int]] = {c: {} for c in status_topics.values()}
     last_stamp: dict[str, int] = {}
     decoder = DecoderFactory()
-    decoders: dict[tuple, object] = {}
+    last_info: dict[str, tuple[int, bytes]] = {}      # camera_info topic -> (file, data) of its latest message
     wanted = indexscan.Wanted(
         streams={t: s for t, s in by_topic.items() if t in channels},
         others=frozenset(t for t in list(status_topics) + list(info_topics) if t in channels),
@@ -334,18 +334,19 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
                             from_telemetry[s].append((stamp, ffc))
                     cols[s].append((stamp, log_time, fi, frozen, counter))
                     continue
-                schema = schemas[topic]
-                dec = decoders.get((fi, topic))
-                if dec is None:
-                    dec = decoders[(fi, topic)] = decoder.decoder_for("cdr", schema)
-                m = dec(ev[4])
-                if topic in info_topics:
-                    infos[info_topics[topic]] = _info(m, topic)
+                if topic in info_topics:          # the last one is kept: decoded once, below
+                    last_info[topic] = (fi, ev[4])
                     continue
                 cam = status_topics[topic]
+                m = ffcstatus.decode(status_types[topic], ev[4])
                 status[cam] += ffcstatus.rows(status_types[topic], m, log_time, last_stamp.get(cam))
                 if status_types[topic] == ffcstatus.DIAGNOSTIC:
                     clock_steps[cam].update(ffcstatus.clock_step_values(m))
+            for topic, (fj, data) in last_info.items():
+                if fj != fi:
+                    continue
+                dec = decoder.decoder_for("cdr", schemas[topic])
+                infos[info_topics[topic]] = _info(dec(data), topic)
         except (McapError, EOFError, struct.error, ValueError) as exc:
             raise RecordingError(f"{f}: damaged MCAP ({type(exc).__name__}: {exc}); "
                                  f"run again with --recover to salvage what is readable") from None

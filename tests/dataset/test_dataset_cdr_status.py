@@ -1,0 +1,85 @@
+"""cdr.diagnostic_array and cdr.bool_message, the FFC status readers of the index: messages serialised by rosbags (an
+independent writer), little- and big-endian, read back field for field; mcap_ros2's decoder (what the index used
+before) gives the same fields; a message cut short is one ValueError, never another exception."""
+from __future__ import annotations
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from rosbags.typesys import Stores, get_typestore
+
+from platform_tools.dataset import ffcstatus
+from platform_tools.dataset.cdr import bool_message, diagnostic_array
+
+TS = get_typestore(Stores.ROS2_HUMBLE)
+M = TS.types
+text = st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\0"), max_size=12)
+key_values = st.lists(st.tuples(text, text), max_size=6)
+statuses = st.lists(st.tuples(st.integers(0, 3), text, text, text, key_values), max_size=4)
+
+
+def _array(sec, nanosec, frame_id, status):
+    return M["diagnostic_msgs/msg/DiagnosticArray"](
+        header=M["std_msgs/msg/Header"](stamp=M["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec),
+                                        frame_id=frame_id),
+        status=[M["diagnostic_msgs/msg/DiagnosticStatus"](
+            level=level, name=name, message=message, hardware_id=hw,
+            values=[M["diagnostic_msgs/msg/KeyValue"](key=k, value=v) for k, v in values])
+            for level, name, message, hw, values in status])
+
+
+def _fields(m):
+    return (m.header.stamp.sec, m.header.stamp.nanosec, m.header.frame_id,
+            [(int(s.level), s.name, s.message, s.hardware_id, [(kv.key, kv.value) for kv in s.values])
+             for s in m.status])
+
+
+@settings(max_examples=150, deadline=None)
+@given(sec=st.integers(-2**31, 2**31 - 1), nanosec=st.integers(0, 999_999_999), frame_id=text, status=statuses,
+       little=st.booleans())
+def test_a_diagnostic_array_reads_back_as_rosbags_wrote_it(sec, nanosec, frame_id, status, little):
+    msg = _array(sec, nanosec, frame_id, status)
+    data = bytes(TS.serialize_cdr(msg, "diagnostic_msgs/msg/DiagnosticArray", little_endian=little))
+    assert _fields(diagnostic_array(data)) == _fields(msg)
+    assert _fields(diagnostic_array(memoryview(data))) == _fields(msg)     # as a chunk's slice gives it
+
+
+@pytest.mark.parametrize("little", [True, False])
+@pytest.mark.parametrize("value", [True, False])
+def test_a_bool_reads_back(value, little):
+    data = bytes(TS.serialize_cdr(M["std_msgs/msg/Bool"](data=value), "std_msgs/msg/Bool", little_endian=little))
+    assert bool_message(data).data is value
+
+
+def test_the_fields_are_the_ones_mcap_ros2_decodes():
+    from mcap_ros2._dynamic import generate_dynamic
+    msg = _array(1_700_000_123, 456, "thermal_left_optical",
+                 [(0, "thermal_left", "ok", "900001", [("ffc_status", "2"), ("clock_step_ns", "-5000000")]),
+                  (1, "thermal_right", "", "", [("ffc_status", "0")])])
+    data = bytes(TS.serialize_cdr(msg, "diagnostic_msgs/msg/DiagnosticArray"))
+    schema = "\n".join(["std_msgs/Header header", "DiagnosticStatus[] status", "=" * 80,
+                        "MSG: std_msgs/Header", "builtin_interfaces/Time stamp", "string frame_id", "=" * 80,
+                        "MSG: builtin_interfaces/Time", "int32 sec", "uint32 nanosec", "=" * 80,
+                        "MSG: diagnostic_msgs/DiagnosticStatus", "byte level", "string name", "string message",
+                        "string hardware_id", "KeyValue[] values", "=" * 80,
+                        "MSG: diagnostic_msgs/KeyValue", "string key", "string value"])
+    decoded = generate_dynamic("diagnostic_msgs/msg/DiagnosticArray", schema)["diagnostic_msgs/msg/DiagnosticArray"](data)
+    assert _fields(diagnostic_array(data)) == _fields(decoded)
+    ours = diagnostic_array(data)
+    assert ffcstatus.rows(ffcstatus.DIAGNOSTIC, ours, 0, None) == ffcstatus.rows(ffcstatus.DIAGNOSTIC, decoded, 0, None)
+    assert ffcstatus.clock_step_values(ours) == {1_700_000_123_000_000_456: -5_000_000}
+
+
+def test_every_message_cut_short_is_one_value_error():
+    msg = _array(7, 8, "f", [(2, "thermal_left", "FFC", "x", [("ffc_status", "2"), ("k", "v")])])
+    data = bytes(TS.serialize_cdr(msg, "diagnostic_msgs/msg/DiagnosticArray"))
+    for n in range(len(data)):
+        with pytest.raises(ValueError):
+            diagnostic_array(data[:n])
+    with pytest.raises(ValueError):
+        bool_message(b"\0\1\0\0")
+    huge = bytearray(data)
+    assert huge[20:24] == (1).to_bytes(4, "little")      # the status count: after stamp and frame_id "f\0", aligned
+    huge[20:24] = (2**31).to_bytes(4, "little")          # far past the data
+    with pytest.raises(ValueError):
+        diagnostic_array(bytes(huge))
