@@ -48,7 +48,7 @@ from .chunk import FILE_COLUMNS, KINDS, TMP_SUFFIX, preload, process_chunk, warm
 from .decode import IMAGE_STREAMS, probe_sizes
 from .engines import ENGINES, EngineError, start_method, started, stdlib_distutils
 from .pairing import plan
-from .recording import RecordingError, open_recording, telemetry_rows
+from .recording import RecordingError, open_recording, read_summaries, telemetry_rows
 from .stereo import BUILT_IN, StereoError, load_plugin
 
 log = logging.getLogger(__name__)
@@ -248,6 +248,8 @@ def export(recordings: list[Path], out: Path, rig, params: Params, *, calibratio
             raise ExportError(str(exc)) from None
     with stdlib_distutils():
         import mrcal  # noqa: F401 - the calibration's, imported without setuptools (engines.stdlib_distutils)
+    for path in recordings:                 # before the fork: forked workers inherit them (recording.read_summaries)
+        read_summaries(path)
     with started(engine, workers, warm_up, preload) as pool:
         return _export(recordings, out, rig, params, calibration=calibration, engine=engine, workers=workers,
                        scheduler=scheduler, recover=recover, on_chunk=on_chunk, topic_map=topic_map,
@@ -268,6 +270,7 @@ def _export(recordings, out, rig, params, *, calibration, engine, workers, sched
         raise ExportError(str(exc)) from None
     recs, plans, tasks_by_rec, idents, cals = [], [], [], [], []
     names = set()
+    rig_hash = rig.hash                     # the whole description serialised and hashed: once, not per chunk
     for path in recordings:
         try:
             rec = open_recording(path, rig, recover=recover, topic_map=topic_map, pool=pool)
@@ -314,12 +317,12 @@ def _export(recordings, out, rig, params, *, calibration, engine, workers, sched
                            "thermal_height": th_h, "params": asdict(params), "out": str(out.resolve()),
                            "depth": depth,
                            "calibration_source": cal.source, "calibration_sha256": cal.sha256,
-                           "rig_hash": rig.hash})
+                           "rig_hash": rig_hash})
         tasks_by_rec.append(chunks)
     calibration_used = _calibration_used(cals)
     manifest = {"format": FORMAT, "recordings": [{k: v for k, v in i.items() if k != "clock_steps"} | {
         "clock_steps": i["clock_steps"]} for i in idents],
-        "params": asdict(params), "calibration": calibration_used, "rig_hash": rig.hash}
+        "params": asdict(params), "calibration": calibration_used, "rig_hash": rig_hash}
     manifest["fingerprint"] = _fingerprint(manifest)
     old = check_out(out, manifest)
     remove_partial(out, names)            # what a stopped or killed run left half-written
