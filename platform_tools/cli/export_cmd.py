@@ -58,7 +58,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--ffc-margin", type=int, default=None, metavar="FRAMES",
                    help="frames dropped on each side of an FFC (default processing.ffc_margin_frames)")
     p.add_argument("--keep-ffc", action="store_true", help="keep FFC frames (flagged in the index)")
-    p.add_argument("--chunk-size", type=int, default=8, metavar="N", help="samples per unit of work (default 8)")
+    p.add_argument("--chunk-size", type=int, default=8, metavar="N",
+                   help="samples per unit of work (default 8); a recording's last chunks are smaller (N/2, N/2, "
+                        "N/4, N/4, ... 1, 1) so that the workers end together")
     p.add_argument("--paper", action="store_true",
                    help="the dataset as the paper releases it: 1 Hz pairs, per thermal camera its 8-bit image, the "
                         "RGB registered into it and the validity mask (no raw16, depth or ZED images)")
