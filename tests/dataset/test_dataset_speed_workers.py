@@ -364,3 +364,57 @@ def test_export_and_sync_check_default_to_the_cpus_they_may_use(sim, tmp_path):
     every = run(set(cpus), "sync-check", str(sim[0]), "--json", "--set", "processing.sync_limits.max_drop_percent=6")
     assert one.returncode == every.returncode == 0, every.stderr
     assert json.loads(one.stdout) == json.loads(every.stdout)
+
+
+#: a pool whose second warm-up to start takes 2 s: 3 map calls, then 8 tasks; prints what each did and when
+_SLOW_WARM_POOL = (
+    "import json, sys\n"
+    "from platform_tools.dataset import engines\n"
+    "from tests.dataset.test_dataset_speed_workers import _stamp, _warm_second_slowly\n"
+    "with engines.started('pool', 2, _warm_second_slowly) as pool:\n"
+    "    pool.map(_stamp, [('scan',)] * 3)\n"
+    "    got = []\n"
+    "    engines.run_pool(_stamp, [('task',)] * 8, lambda t, r: got.append(r), 2, None, pool)\n"
+    "print(json.dumps(got))\n")
+
+
+def _warm_second_slowly() -> None:
+    """A warm-up that records its pid and times, and takes 2 s in the worker that starts it second."""
+    import fcntl
+    path = os.environ["WARM_LOG"]
+    with open(path, "a+") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        f.seek(0)
+        second = len(f.read().split()) > 0
+        f.write(f"{os.getpid()}\n")
+    start = time.time()
+    if second:
+        time.sleep(2.0)
+    with open(path + ".times", "a") as f:
+        f.write(json.dumps({"pid": os.getpid(), "start": start, "end": time.time()}) + "\n")
+
+
+def _stamp(what) -> dict:
+    """A call that records where and when it ran."""
+    time.sleep(0.05)
+    return {"pid": os.getpid(), "at": time.time(), "what": what}
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
+def test_a_worker_whose_warm_up_ends_first_starts_the_tasks_without_waiting_for_the_other(tmp_path):
+    """Each forked worker takes one warm-up and waits only until the other has taken its own (not until it is done),
+    so a worker ready first runs the queued tasks while the other still loads its kernels; no task runs in a worker
+    before its own warm-up ended."""
+    log = tmp_path / "warm"
+    env = {k: v for k, v in os.environ.items() if k != engines.START_ENV} | {"WARM_LOG": str(log)}
+    r = subprocess.run([sys.executable, "-c", _SLOW_WARM_POOL], cwd=REPO, capture_output=True, text=True,
+                       timeout=600, env=env)
+    assert r.returncode == 0, r.stderr
+    tasks = json.loads(r.stdout.strip().splitlines()[-1])
+    warms = {w["pid"]: w for w in map(json.loads, (tmp_path / "warm.times").read_text().splitlines())}
+    assert len(warms) == 2 and len(tasks) == 8                      # one warm-up in each worker
+    slow = max(warms.values(), key=lambda w: w["end"] - w["start"])
+    assert slow["end"] - slow["start"] >= 2.0
+    assert all(t["at"] >= warms[t["pid"]]["end"] for t in tasks)     # none ran cold
+    early = [t for t in tasks if t["at"] < slow["end"]]
+    assert early and all(t["pid"] != slow["pid"] for t in early)     # the other worker did not wait for it
