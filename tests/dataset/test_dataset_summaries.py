@@ -10,6 +10,9 @@ import pytest
 
 from platform_tools.dataset import recording
 
+#: every test reads the simulated recording (one exports it): the quick loop (make test-fast) leaves them to make test
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture
 def parses(monkeypatch):
