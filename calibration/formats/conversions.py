@@ -108,7 +108,30 @@ def representation(lens, family: str) -> Representation:
         return Representation(family, _K(f.intrinsics), f.intrinsics[4:8], f, lensmodel)
     target = {"rational_polynomial": "LENSMODEL_OPENCV8", "plumb_bob": "LENSMODEL_OPENCV5"}[family]
     f = fit_lensmodel(src, size, target, core)
+    if target == "LENSMODEL_OPENCV8":
+        f = _without_pole(f, src, size, core)
     return Representation(family, _K(f.intrinsics), f.intrinsics[4:], f, lensmodel)
+
+
+#: denser grids the nearest OPENCV8 is fitted on again when the first fit is not healthy (fit.fit_lensmodel's default
+#: grid is 40 points wide)
+REFIT_GRID_WIDTHS = (80, 160)
+
+
+def _without_pole(f, src, size, core):
+    """``f`` (a nearest-OPENCV8 fit) if it is healthy (calibration.lens.health: every pixel survives unproject ->
+    project, the radius grows out to the corners), else the first healthy fit on a denser grid, else ``f``. The
+    rational fit is ill-conditioned: numerator and denominator may share a near root that falls between the grid's
+    points, a pole the fit never sees (seen on a Kannala-Brandt solve: k1 -39.1 against k4 -38.7, no ray in a ring
+    65 px from the centre, while the same lens to nine digits fitted healthy); a denser grid samples that ring."""
+    from calibration.lens.health import check_mrcal
+    if check_mrcal(f.lensmodel, f.intrinsics, size).ok:
+        return f
+    for n_width in REFIT_GRID_WIDTHS:
+        g = fit_lensmodel(src, size, f.lensmodel, core, n_width=n_width)
+        if check_mrcal(g.lensmodel, g.intrinsics, size).ok:
+            return g
+    return f
 
 
 # Beyond this off-axis angle at the image corners a lens is a fisheye for ROS: image_geometry unprojects a
