@@ -124,16 +124,6 @@ def bool_message(data) -> Bool:
     return Bool(data[4] != 0)
 
 
-def _aligned_string(data: bytes, pos: int, u32) -> tuple[str, int]:
-    """:func:`_cdr_string` at ``pos`` aligned to 4 first, of ``bytes`` (the status readers' inner loop)."""
-    pos = (pos + 3) & ~3                    # 4-byte alignment counted from the 4-byte encapsulation header
-    n = u32.unpack_from(data, pos)[0]
-    end = pos + 4 + n
-    if end > len(data):
-        raise ValueError(f"a CDR string of {n} bytes at byte {pos} of {len(data)}")
-    return data[pos + 4:end].rstrip(b"\0").decode("utf-8", "replace"), end
-
-
 def diagnostic_array(data) -> DiagnosticArray:
     """A CDR-serialised diagnostic_msgs/msg/DiagnosticArray, whole (the fields mcap_ros2's decoder gives, several
     times faster: an FFC status topic at 30 Hz per camera is a message per frame, each decoded in the export's
@@ -144,23 +134,23 @@ def diagnostic_array(data) -> DiagnosticArray:
         endian = "<" if data[1] == 1 else ">"
         u32 = struct.Struct(endian + "I")
         sec, nanosec = struct.unpack_from(endian + "iI", data, 4)
-        frame_id, pos = _aligned_string(data, 12, u32)
+        frame_id, pos = _cdr_string(data, 12, u32)
         pos = _align(pos, 4)
         count = u32.unpack_from(data, pos)[0]
         pos += 4
         status = []
         for _ in range(count):
             level = data[pos]                                   # an octet: no alignment
-            name, pos = _aligned_string(data, pos + 1, u32)
-            message, pos = _aligned_string(data, pos, u32)
-            hardware_id, pos = _aligned_string(data, pos, u32)
+            name, pos = _cdr_string(data, _align(pos + 1, 4), u32)
+            message, pos = _cdr_string(data, _align(pos, 4), u32)
+            hardware_id, pos = _cdr_string(data, _align(pos, 4), u32)
             pos = _align(pos, 4)
             n = u32.unpack_from(data, pos)[0]
             pos += 4
             values = []
             for _ in range(n):
-                key, pos = _aligned_string(data, pos, u32)
-                value, pos = _aligned_string(data, pos, u32)
+                key, pos = _cdr_string(data, _align(pos, 4), u32)
+                value, pos = _cdr_string(data, _align(pos, 4), u32)
                 values.append(KeyValue(key, value))
             status.append(DiagnosticStatus(level, name, message, hardware_id, values))
     except (struct.error, IndexError) as exc:

@@ -105,19 +105,19 @@ class Pool:
         self._deferred = warm_up if forked else None
         #: how many forked workers have taken their warm-up, and the condition one that has run it waits on until
         #: every worker has taken its own (_warm_worker)
-        barrier = (ctx.RawValue("i", 0), ctx.Condition(), workers) if self._deferred is not None else None
+        warm_count = (ctx.RawValue("i", 0), ctx.Condition(), workers) if self._deferred is not None else None
         with _worker_environment(), (_opencv_single_threaded() if forked else contextlib.nullcontext()):
             if forked and preload is not None:
                 with stdlib_distutils():
                     _warm(preload)          # here: the forked workers inherit what it loaded
             self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_start_worker,
-                                             initargs=(os.getpid(), None if forked else warm_up, barrier))
+                                             initargs=(os.getpid(), None if forked else warm_up, warm_count))
             for _ in range(workers):    # all started now (a forking executor starts them all at the first)
                 self._pool.submit(_nothing)
 
     def _warm_workers(self) -> None:
         """Queue each forked worker's warm-up (once): one call per worker, each of which waits for the others
-        (the barrier passed to :func:`_start_worker`), so that no worker takes two and leaves another cold."""
+        (the count passed to :func:`_start_worker`), so that no worker takes two and leaves another cold."""
         if self._deferred is None:
             return
         warm_up, self._deferred = self._deferred, None
@@ -264,18 +264,18 @@ def _opencv_single_threaded():
 
 #: (warm-ups taken, its condition, workers) of the pool, which a forked worker waits on after its warm-up
 #: (:func:`_warm_worker`), set by :func:`_start_worker`
-_barrier: list = []
+_warm_count: list = []
 #: how long a warm worker waits for the others to take their warm-up; a worker still busy after it warms up in its
 #: next task instead (numba loads its kernels at their first call)
 WARM_WAIT_S = 10.0
 
 
-def _start_worker(parent_pid: int, warm_up, barrier=None) -> None:
+def _start_worker(parent_pid: int, warm_up, warm_count=None) -> None:
     """The pool's initializer: end with the parent, then (a spawned worker) get ready for work; (a forked one) keep
-    the barrier of :func:`_warm_worker`."""
+    the warm-up count of :func:`_warm_worker`."""
     from .workers import die_with_parent
     die_with_parent(parent_pid)
-    _barrier[:] = [barrier] if barrier is not None else []
+    _warm_count[:] = [warm_count] if warm_count is not None else []
     if warm_up is not None:
         _warm(warm_up)
 
@@ -285,14 +285,14 @@ def _warm_worker(warm_up) -> None:
     a worker still loading its kernels takes no task before it is done, so none runs cold). Waiting until the others
     had finished theirs kept a worker that ended its scans early idle while the samples were queued: 0.6 s of a 15 s
     export on this project's 60 s recording, docs/dataset.md "Speed"."""
-    if _barrier:
-        taken, cond, workers = _barrier[0]
+    if _warm_count:
+        taken, cond, workers = _warm_count[0]
         with cond:
             taken.value += 1
             cond.notify_all()
     with stdlib_distutils():
         _warm(warm_up)
-    if _barrier:
+    if _warm_count:
         with cond:          # a worker that does not come in time (busy, or gone): go on, it warms up in its task
             cond.wait_for(lambda: taken.value >= workers, WARM_WAIT_S)
 

@@ -331,14 +331,13 @@ def _export(recordings, out, rig, params, *, calibration, engine, workers, sched
     tasks = [t for ch in tasks_by_rec for t in ch]
     todo = [t for t in tasks if not _chunk_complete(out, out / CHUNKS / f"{t['id']}.json",
                                                     [p["sample"] for p in t["pairs"]])]
-    done = {t["id"] for t in tasks} - {t["id"] for t in todo}
     models = (cals[0].to_dict() if len({c.sha256 for c in cals}) == 1
               else {"per_recording": {r.name: c.to_dict() for r, c in zip(recs, cals)}})
     manifest |= {"status": "running", "calibration_models": models,
                  "chunks": len(tasks), "samples": sum(len(t["pairs"]) for t in tasks)}
     with _interrupts_deferred():
         atomic.write_text(out / MANIFEST, json.dumps(manifest, indent=2) + "\n")
-    resumed = old is not None and len(done) > 0
+    resumed = old is not None and len(todo) < len(tasks)
     if resumed:
         log.warning("%s: resuming: %d of %d chunks already done", out, len(tasks) - len(todo), len(tasks))
 
