@@ -23,12 +23,16 @@ cd "$(dirname "$0")"
 #                           compose file through `docker-compose config` (no Docker engine needed)
 #   python3-cryptography openssl  SROS2 keys without ROS (rig-device sros2-keys), and the independent
 #                           tool (openssl verify / smime -verify) the tests check those keys with
+#   libzstd1 zstd           the export decompresses MCAP chunks with Debian's libzstd (built with zstd's
+#                           assembly Huffman decoders: 1.2x python-zstandard's wheel, bench_dataset.py --zstd);
+#                           the zstd tool writes a frame the tests read back
 DEBIAN_PACKAGES=(
     python3-venv python3-mrcal mrcal mrgingham python3-numpy
     python3-dev build-essential libgl1 libglib2.0-0
     chromium chromium-driver
     shellcheck docker-compose
     python3-cryptography openssl
+    libzstd1 zstd
 )
 
 say() { printf 'bootstrap: %s\n' "$*" >&2; }

@@ -27,8 +27,11 @@ Before each timed run the recording's files are read once (into the page cache, 
 the last run); ``--cold`` evicts them instead (``posix_fadvise``, no root needed): the export then reads them from
 the disk, as it does a recording larger than the free memory.
 
+4. ``--zstd RECORDING``: the thermal chunks' decompression alone, the system's libzstd (what the export uses,
+   platform_tools/dataset/libzstd.py) beside python-zstandard's bundled one, interleaved, same bytes checked.
+
 Run: .venv/bin/python bench/bench_dataset.py [--frames N] [--json] [--export RECORDING [--rate HZ] [--repeats N]
-     [--spawn] [--fork] [--cold]]
+     [--spawn] [--fork] [--cold]] [--zstd RECORDING [--chunks N]]
 """
 from __future__ import annotations
 
@@ -245,6 +248,46 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
                             for n in ours for rev in revs}}
 
 
+def bench_zstd(recording: Path, chunks: int, rounds: int) -> dict:
+    """The export's chunk decompression (mcapscan -> libzstd.decompress: the system's libzstd) beside
+    python-zstandard's, on the first ``chunks`` zstd chunks of ``recording`` that hold a thermal frame (what the
+    index decompresses whole), ``rounds`` interleaved rounds; the outputs compared byte for byte."""
+    import statistics
+    import zstandard
+    from mcap.reader import make_reader
+    from platform_tools.dataset import libzstd, mcapscan
+    from platform_tools.dataset.recording import mcap_files
+    blobs = []
+    for path in mcap_files(recording)[1]:
+        with open(path, "rb") as fh:
+            summary = make_reader(fh).get_summary()
+            thermal = {cid for cid, c in summary.channels.items() if c.topic.startswith("/thermal/")
+                       and c.topic.endswith("image_raw")}
+            for c in sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset):
+                if c.compression == "zstd" and thermal & set(c.message_index_offsets) and len(blobs) < chunks:
+                    _, data, size = mcapscan._chunk_records(fh, c)
+                    blobs.append((bytes(data), size))
+    if not blobs:
+        raise SystemExit(f"{recording}: no zstd chunk holding a thermal frame")
+    total = sum(size for _, size in blobs)
+    dz = zstandard.ZstdDecompressor()
+    ways = {libzstd.backend(): lambda d, n: libzstd.decompress(d, n),
+            "python-zstandard " + ".".join(map(str, zstandard.ZSTD_VERSION)):
+                lambda d, n: dz.decompress(d, max_output_size=n)}
+    for d, n in blobs:
+        assert bytes(libzstd.decompress(d, n)) == dz.decompress(d, max_output_size=n)
+    speeds = {k: [] for k in ways}
+    for _ in range(rounds):
+        for k, fn in ways.items():
+            t = time.perf_counter()
+            for d, n in blobs:
+                fn(d, n)
+            speeds[k].append(total / (time.perf_counter() - t) / 1e9)
+    return {"recording": str(recording), "chunks": len(blobs), "uncompressed_mb": total / 1e6,
+            "ratio": total / sum(len(d) for d, _ in blobs), "rounds": rounds,
+            "gb_per_s": {k: statistics.median(v) for k, v in speeds.items()}, "runs_gb_per_s": speeds}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--frames", type=int, default=100, help="frames per 16->8-bit measurement (default 100)")
@@ -262,8 +305,24 @@ def main(argv=None) -> int:
                     help="with --export: the recording evicted from the page cache before each timed run, not read "
                          "into it (read from "
                          "the disk, as a recording larger than the free memory is)")
+    ap.add_argument("--zstd", type=Path, metavar="RECORDING",
+                    help="only the chunk decompression: the system's libzstd (what the export uses) beside "
+                         "python-zstandard, on this recording's thermal chunks")
+    ap.add_argument("--chunks", type=int, default=100, help="with --zstd: chunks decompressed per round (default 100)")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
+    if args.zstd:
+        r = bench_zstd(args.zstd, args.chunks, rounds=9)
+        if args.json:
+            print(json.dumps(r, indent=2))
+            return 0
+        print(f"zstd decompression of {r['chunks']} thermal chunks of {r['recording']} ({r['uncompressed_mb']:.0f} MB, "
+              f"ratio {r['ratio']:.2f}), median of {r['rounds']} interleaved rounds, same bytes:")
+        for k, v in r["gb_per_s"].items():
+            print(f"  {k:<34} {v:.3f} GB/s  (runs {min(r['runs_gb_per_s'][k]):.3f}-{max(r['runs_gb_per_s'][k]):.3f})")
+        a, b = r["gb_per_s"].values()
+        print(f"  ratio: {a / b:.2f}x")
+        return 0
     if args.export:
         r = bench_export(args.export, args.rate, args.repeats, revs=tuple(args.previous or (BASELINE,)),
                          fork=args.fork, spawn=args.spawn, cold=args.cold)

@@ -31,6 +31,8 @@ import io
 import os
 import struct
 
+from platform_tools.dataset import libzstd
+
 #: record opcodes (MCAP specification)
 OP_MESSAGE = 0x05
 OP_CHUNK = 0x06
@@ -61,8 +63,7 @@ def _decompress(compression: str, data, size: int) -> bytes:
     if compression == "":
         return bytes(data)
     if compression == "zstd":
-        import zstandard
-        return zstandard.ZstdDecompressor().decompress(data, max_output_size=size)
+        return libzstd.decompress(data, size)
     if compression == "lz4":
         import lz4.frame
         return lz4.frame.decompress(bytes(data))
@@ -91,14 +92,14 @@ def _chunk_records(fh, chunk_index) -> tuple[str, memoryview, int]:
     return compression, mv[pos:pos + n], size
 
 
-def read_chunk(fh, chunk_index) -> bytes:
+def read_chunk(fh, chunk_index) -> bytes | bytearray:
     """The decompressed records of the chunk ``chunk_index`` (an mcap ChunkIndex) of the open file ``fh``."""
     compression, data, size = _chunk_records(fh, chunk_index)
     try:
         out = _decompress(compression, data, size)
     except ScanError:
         raise
-    except Exception as exc:        # zstandard.ZstdError, lz4's RuntimeError: a damaged chunk
+    except Exception as exc:        # libzstd.ZstdError, lz4's RuntimeError: a damaged chunk
         raise ScanError(f"chunk at offset {chunk_index.chunk_start_offset}: {type(exc).__name__}: {exc}") from None
     if len(out) != size:
         raise ScanError(f"chunk at offset {chunk_index.chunk_start_offset}: {len(out)} bytes decompressed, "

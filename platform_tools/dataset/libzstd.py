@@ -1,0 +1,93 @@
+"""Whole zstd frames decompressed by the system's libzstd (Debian's ``libzstd1``) through ctypes, python-zstandard
+where that library is not found.
+
+Why not python-zstandard alone: its wheels bundle libzstd 1.5.7 built from C only, while Debian 12's libzstd 1.5.4
+is built with zstd's x86-64 assembly Huffman decoders. On the thermal chunks of this project's simulated full-size
+recording (16-bit frames, ratio 1.95) Debian's library decompresses about 1.25x faster (0.39-0.41 against
+0.32-0.33 GB/s, medians of 9 interleaved rounds over 100 chunks, AMD EPYC Zen 1; the PyPI ``zstd`` package's 1.5.7
+0.32 GB/s). Those chunks are most of an export's index (docs/dataset.md, "Speed and clean stops");
+``bench/bench_dataset.py --zstd`` measures both on a recording's own chunks.
+
+The output is the same bytes either way (zstd's format is one); a damaged frame raises :class:`ZstdError` with
+libzstd's own error name in both.
+"""
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+
+import numpy as np
+
+#: the shared library's names tried in turn (Debian's soname first; find_library runs ldconfig, so it comes second)
+_NAMES = ("libzstd.so.1",)
+
+_lib = None          # the loaded library, False once it was looked for and not found
+
+
+class ZstdError(ValueError):
+    """A zstd frame that does not decompress to the size it was said to have (damaged or not zstd); one line."""
+
+
+def _names():
+    yield from _NAMES
+    found = ctypes.util.find_library("zstd")
+    if found:
+        yield found
+
+
+def _load():
+    """The system's libzstd with the three functions used here typed, or None."""
+    global _lib
+    if _lib is None:
+        _lib = False
+        for name in _names():
+            try:
+                lib = ctypes.CDLL(name)
+                lib.ZSTD_decompress.restype = ctypes.c_size_t
+                lib.ZSTD_decompress.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p, ctypes.c_size_t]
+                lib.ZSTD_isError.restype = ctypes.c_uint
+                lib.ZSTD_isError.argtypes = [ctypes.c_size_t]
+                lib.ZSTD_getErrorName.restype = ctypes.c_char_p
+                lib.ZSTD_getErrorName.argtypes = [ctypes.c_size_t]
+                lib.ZSTD_versionString.restype = ctypes.c_char_p
+            except (OSError, AttributeError):
+                continue
+            _lib = lib
+            break
+    return _lib or None
+
+
+def backend() -> str:
+    """Which library :func:`decompress` uses: ``"libzstd 1.5.4 (system)"`` or ``"python-zstandard 1.5.7"``."""
+    lib = _load()
+    if lib is not None:
+        return f"libzstd {lib.ZSTD_versionString().decode()} (system)"
+    import zstandard
+    return "python-zstandard " + ".".join(map(str, zstandard.ZSTD_VERSION))
+
+
+def decompress(data, size: int) -> bytes | bytearray:
+    """The zstd frame(s) ``data`` (bytes-like, read-only or not), decompressed into ``size`` bytes.
+
+    More than ``size`` bytes of content, or a damaged frame, raise :class:`ZstdError`; fewer give a shorter result
+    (the caller compares lengths, as it knows what was expected)."""
+    lib = _load()
+    if lib is None:
+        import zstandard
+        try:
+            out = zstandard.ZstdDecompressor().decompress(data, max_output_size=size)
+        except zstandard.ZstdError as exc:
+            raise ZstdError(str(exc)) from None
+        if len(out) > size:         # a frame header's content size wins over max_output_size there
+            raise ZstdError(f"error decompressing zstd data: {len(out)} bytes of content, more than {size}")
+        return out
+    src = np.frombuffer(data, np.uint8)
+    out = bytearray(size)
+    dst = (ctypes.c_char * size).from_buffer(out) if size else None
+    got = lib.ZSTD_decompress(dst, size, src.ctypes.data if src.size else None, src.size)
+    if lib.ZSTD_isError(got):
+        raise ZstdError(f"error decompressing zstd data: {lib.ZSTD_getErrorName(got).decode()}")
+    del dst                         # the ctypes view pins the bytearray's size; resizing needs it gone
+    if got < size:
+        del out[got:]
+    return out
