@@ -92,7 +92,7 @@ def _chunk_records(fh, chunk_index) -> tuple[str, memoryview, int]:
     return compression, mv[pos:pos + n], size
 
 
-def read_chunk(fh, chunk_index) -> bytes | bytearray:
+def read_chunk(fh, chunk_index) -> bytes | memoryview:
     """The decompressed records of the chunk ``chunk_index`` (an mcap ChunkIndex) of the open file ``fh``."""
     compression, data, size = _chunk_records(fh, chunk_index)
     try:
