@@ -126,9 +126,8 @@ def bool_message(data) -> Bool:
 
 def diagnostic_array(data) -> DiagnosticArray:
     """A CDR-serialised diagnostic_msgs/msg/DiagnosticArray, whole (the fields mcap_ros2's decoder gives, several
-    times faster: an FFC status topic at 30 Hz per camera is a message per frame, each decoded in the export's
-    process while its workers wait, docs/dataset.md "Speed"); ValueError when the data ends before the message
-    does."""
+    times faster: an FFC status topic at 30 Hz per camera is a message per frame, each decoded while the index
+    scans its chunk, docs/dataset.md "Speed"); ValueError when the data ends before the message does."""
     data = bytes(data)
     try:
         endian = "<" if data[1] == 1 else ">"

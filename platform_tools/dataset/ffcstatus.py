@@ -19,6 +19,8 @@ it. (The ZED does not see an FFC: the freeze says nothing of a Boson's trigger o
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 BOOL = "std_msgs/msg/Bool"
@@ -70,6 +72,32 @@ def rows(type_name: str, msg, log_ns: int, last_frame_stamp: int | None) -> list
             except ValueError:
                 continue
     return out
+
+
+class StatusRead(NamedTuple):
+    """What the index keeps of one status message (:func:`read`): small, so the export's workers send it back in
+    place of the message, and decode it there while scanning instead of in the export's process after the scans."""
+    stamp_ns: int | None                # a DiagnosticArray's header stamp; None for a Bool (stamped by its frame)
+    ffc: tuple                          # its ffc_status values, in order (a Bool: 2 if true else 0)
+    clock_steps: tuple                  # its (header stamp ns, clock_step_ns) pairs (clock_step_values)
+
+
+def read(type_name: str, data) -> StatusRead:
+    """One CDR-serialised status message of type ``type_name`` (:func:`check_type`'s) as the index keeps it;
+    ValueError when it is cut short. ``rows_of(read(t, data), ...)`` is ``rows(t, decode(t, data), ...)``."""
+    msg = decode(type_name, data)
+    if type_name == BOOL:
+        return StatusRead(None, (2 if bool(msg.data) else 0,), ())
+    return StatusRead(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec,
+                      tuple(v for _, v in rows(type_name, msg, 0, None)), tuple(clock_step_values(msg).items()))
+
+
+def rows_of(status: StatusRead, log_ns: int, last_frame_stamp: int | None) -> list[tuple[int, int]]:
+    """The ``(stamp ns, ffc_status)`` rows of one :class:`StatusRead` (as :func:`rows`)."""
+    stamp = status.stamp_ns
+    if stamp is None:
+        stamp = last_frame_stamp if last_frame_stamp is not None else int(log_ns)
+    return [(int(stamp), v) for v in status.ffc]
 
 
 #: the key of the device's status values (firmware/device/clockstep.py) holding the host clock's steps since

@@ -3,7 +3,8 @@ export's pool workers when it has them (:func:`scan_file`), else here.
 
 Of a rig stream's message: its header stamp; of a thermal frame also a digest of the last TAIL_BYTES of its image rows
 (two consecutive frames with equal digests: a frozen frame, the FFC), its Boson telemetry frame counter and FFC state.
-Of the other wanted topics (status, camera_info: small messages) the data itself, for the caller to decode.
+Of an FFC status message what the index keeps of it (:func:`.ffcstatus.read`, decoded here: in the workers, while
+they scan); of the other wanted topics (camera_info: small messages) the data itself, for the caller to decode.
 
 From an uncompressed chunk (rosbags writes them) a thermal frame is read in part (:class:`.mcapscan.Sparse`): its
 fields, then one read of the rows holding its tail and its telemetry rows; a ZED image only for its stamp.
@@ -19,7 +20,7 @@ from __future__ import annotations
 import hashlib
 import heapq
 import struct
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .cdr import STAMP_BYTES, header_stamp, image_layout
@@ -47,6 +48,7 @@ class Wanted:
     stamps_only: frozenset        # stream topics of which only the header stamp is read (STAMP_BYTES)
     telemetry_rows: int           # rig: Boson telemetry rows below a thermal image (on_device.thermal_telemetry_rows)
     model_px: tuple               # the thermal camera model's (width, height), to tell whether a frame has them
+    status: dict = field(default_factory=dict)  # of ``others``: FFC status topic -> its type (ffcstatus.check_type's)
 
     def topics(self) -> set:
         return set(self.streams) | set(self.others)
@@ -105,9 +107,13 @@ def _digest(tail) -> bytes:
 def event(log_time: int, offset: int, place: int, topic: str, data, wanted: Wanted, rows_cache: dict) -> tuple:
     """One message as the index keeps it: ``(log_time, offset, place, topic, stamp, digest, counter, ffc)`` for a rig
     stream (``digest`` None, ``counter`` and ``ffc`` -1 but for thermal frames), ``(log_time, offset, place, topic,
-    data bytes)`` for the others."""
+    ffcstatus.StatusRead)`` for an FFC status, ``(log_time, offset, place, topic, data bytes)`` for the others;
+    ValueError for a status message cut short."""
     stream = wanted.streams.get(topic)
     if stream is None:
+        if topic in wanted.status:
+            from .ffcstatus import read
+            return log_time, offset, place, topic, read(wanted.status[topic], data)
         return log_time, offset, place, topic, bytes(data)
     stamp = header_stamp(data.head if isinstance(data, Sparse) else data)
     if not stream.startswith("thermal"):

@@ -323,7 +323,8 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
         others=frozenset(t for t in list(status_topics) + list(info_topics) if t in channels),
         # the streams of which the index needs only the header stamp (of a thermal frame: its tail and telemetry too)
         stamps_only=frozenset(t for t, s in by_topic.items() if not s.startswith("thermal")),
-        telemetry_rows=rig.desc.on_device.thermal_telemetry_rows, model_px=_thermal_px(rig))
+        telemetry_rows=rig.desc.on_device.thermal_telemetry_rows, model_px=_thermal_px(rig),
+        status={t: ty for t, ty in status_types.items() if t in channels})
     for fi, f in enumerate(files):
         try:
             with open(f, "rb") as fh:
@@ -352,10 +353,8 @@ def open_recording(path: Path, rig, *, recover: bool = False, streams=STREAMS, t
                     last_info[topic] = (fi, ev[4])
                     continue
                 cam = status_topics[topic]
-                m = ffcstatus.decode(status_types[topic], ev[4])
-                status[cam] += ffcstatus.rows(status_types[topic], m, log_time, last_stamp.get(cam))
-                if status_types[topic] == ffcstatus.DIAGNOSTIC:
-                    clock_steps[cam].update(ffcstatus.clock_step_values(m))
+                status[cam] += ffcstatus.rows_of(ev[4], log_time, last_stamp.get(cam))
+                clock_steps[cam].update(ev[4].clock_steps)
             for topic, (fj, data) in last_info.items():
                 if fj != fi:
                     continue

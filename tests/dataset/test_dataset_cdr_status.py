@@ -3,6 +3,8 @@ independent writer), little- and big-endian, read back field for field; mcap_ros
 before) gives the same fields; a message cut short is one ValueError, never another exception."""
 from __future__ import annotations
 
+import pickle
+
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -83,3 +85,32 @@ def test_every_message_cut_short_is_one_value_error():
     huge[20:24] = (2**31).to_bytes(4, "little")          # far past the data
     with pytest.raises(ValueError):
         diagnostic_array(bytes(huge))
+
+
+ffc_values = st.lists(st.tuples(st.sampled_from(["ffc_status", "clock_step_ns", "other"]),
+                                st.one_of(st.integers(-10**12, 10**12).map(str), text)), max_size=5)
+
+
+@settings(max_examples=150, deadline=None)
+@given(sec=st.integers(0, 2**31 - 1), nanosec=st.integers(0, 999_999_999),
+       status=st.lists(st.tuples(st.integers(0, 3), text, text, text, ffc_values), max_size=4),
+       log_ns=st.integers(0, 2**62), last=st.one_of(st.none(), st.integers(0, 2**62)))
+def test_what_the_workers_send_back_gives_the_rows_the_whole_message_gives(sec, nanosec, status, log_ns, last):
+    # ffcstatus.read runs in the export's workers; the rows and clock steps made of it are those of the message
+    data = bytes(TS.serialize_cdr(_array(sec, nanosec, "f", status), "diagnostic_msgs/msg/DiagnosticArray"))
+    whole = diagnostic_array(data)
+    got = ffcstatus.read(ffcstatus.DIAGNOSTIC, memoryview(data))
+    assert pickle.loads(pickle.dumps(got)) == got
+    assert ffcstatus.rows_of(got, log_ns, last) == ffcstatus.rows(ffcstatus.DIAGNOSTIC, whole, log_ns, last)
+    assert dict(got.clock_steps) == ffcstatus.clock_step_values(whole)
+
+
+@pytest.mark.parametrize("value", [True, False])
+@pytest.mark.parametrize("last", [None, 123_456_789])
+def test_a_bool_read_by_a_worker_is_stamped_by_its_frame_here(value, last):
+    data = bytes(TS.serialize_cdr(M["std_msgs/msg/Bool"](data=value), "std_msgs/msg/Bool"))
+    got = ffcstatus.read(ffcstatus.BOOL, data)
+    assert ffcstatus.rows_of(got, 99, last) == ffcstatus.rows(ffcstatus.BOOL, bool_message(data), 99, last)
+    assert ffcstatus.rows_of(got, 99, last) == [(99 if last is None else last, 2 if value else 0)]
+    with pytest.raises(ValueError):
+        ffcstatus.read(ffcstatus.BOOL, data[:4])

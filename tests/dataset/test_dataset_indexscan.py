@@ -119,6 +119,39 @@ def test_a_damaged_chunk_met_in_a_worker_is_one_line(sim, rig, pool, tmp_path):
     _same(open_recording(sim[0], rig, pool=pool), open_recording(sim[0], rig))    # the pool still works
 
 
+@pytest.mark.parametrize("workers", [False, True])
+def test_a_status_message_cut_short_is_one_line(sim, rig, pool, tmp_path, workers):
+    """The FFC status messages are decoded where the chunks are scanned (ffcstatus.read, in the workers): one cut
+    short there is the same one line naming the file as here."""
+    from mcap.writer import Writer
+    dst = tmp_path / "rec"
+    shutil.copytree(sim[0], dst)
+    bag = next((dst / "bag").glob("*.mcap"))
+    out = io.BytesIO()
+    w = Writer(out, compression=CompressionType.ZSTD)
+    w.start()
+    schemas, channels, seen = {}, {}, 0
+    for schema, channel, msg in make_reader(io.BytesIO(bag.read_bytes())).iter_messages(log_time_order=False):
+        if schema.id not in schemas:
+            schemas[schema.id] = w.register_schema(schema.name, schema.encoding, schema.data)
+        if channel.id not in channels:
+            channels[channel.id] = w.register_channel(channel.topic, channel.message_encoding, schemas[schema.id],
+                                                      channel.metadata)
+        data = msg.data
+        if channel.topic == "/thermal/right/status":
+            seen += 1
+            data = data[:14] if seen == 40 else data
+        w.add_message(channels[channel.id], log_time=msg.log_time, publish_time=msg.publish_time,
+                      sequence=msg.sequence, data=data)
+    w.finish()
+    assert seen > 40
+    bag.write_bytes(out.getvalue())
+    with pytest.raises(RecordingError) as exc:
+        open_recording(dst, rig, pool=pool if workers else None)
+    msg = str(exc.value)
+    assert str(bag) in msg and "damaged MCAP" in msg and "\n" not in msg
+
+
 def test_sync_check_with_workers_reports_what_one_process_does(platform_tools, recordings):
     runs = [platform_tools("sync-check", str(recordings["rosbags"]), "--json", "--workers", n) for n in ("1", "2")]
     # the recording's 5 missing trigger pulses (of 150) fail the 2 % drop limit: exit 1 from both, nothing else fails
