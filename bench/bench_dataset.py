@@ -209,6 +209,12 @@ FORK_ENV = "PLATFORM_TOOLS_EXPORT_WORKERS"
 WARM_UP_RATE_HZ = 0.25
 
 
+def paired_median(new_s: list, old_s: list, new_samples: int, old_samples: int) -> float:
+    """The median over repeats of (samples/s of the new run) / (samples/s of the old run of the same repeat)."""
+    import statistics
+    return statistics.median((new_samples / a) / (old_samples / b) for a, b in zip(new_s, old_s))
+
+
 def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, revs=(BASELINE,),
                  fork: bool = False, spawn: bool = False, cold: bool = False) -> dict:
     """``spawn`` / ``fork``: this tree a second time with its workers spawned ("new-spawn") / forked ("new-fork"),
@@ -244,6 +250,10 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
                 "ratio": {f"{n} / {rev}": sps[n] / sps[rev] for n in ours for rev in revs},
                 "cpu_ratio": {f"{n} / {rev}": min(cpu[rev]) * samples[n] / (min(cpu[n]) * samples[rev])
                               for n in ours for rev in revs},
+                # each repeat's two runs ran back to back: their ratio sees the same machine (a shared one drifts
+                # by 10-20 % within minutes); the median of those is the figure its drift moves least
+                "paired_ratio_median": {f"{n} / {rev}": paired_median(times[n], times[rev], samples[n], samples[rev])
+                                        for n in ours for rev in revs},
                 "outputs": {f"{n} / {rev}": compare_outputs(tmp / f"out-{rev}", tmp / f"out-{n}")
                             for n in ours for rev in revs}}
 
@@ -348,7 +358,8 @@ def main(argv=None) -> int:
             o = r["outputs"][pair]
             ours, rev = pair.split(" / ")
             print(f"  ratio {pair}: {ratio:.2f}x in samples/s (wall clock), {r['cpu_ratio'][pair]:.2f}x in "
-                  f"samples per CPU second")
+                  f"samples per CPU second (best runs); median of the {len(r['seconds']['new'])} back-to-back "
+                  f"pairs: {r['paired_ratio_median'][pair]:.2f}x (wall clock)")
             print(f"    outputs: {o['files']} files, {o['identical_bytes']} identical bytes, {len(o['same_pixels'])} "
                   f"PNGs with other bytes but the same pixels, {len(o['same_pixels_as_jpeg'])} PNGs written as "
                   f"the recorded JPEG, with its pixels, {len(o['different'])} different "

@@ -58,3 +58,12 @@ def test_cold_runs_start_with_the_recording_out_of_the_page_cache_and_warm_ones_
     assert _bench().evict(tmp_path / "rec") == 0
     assert cached() == 0
     assert _bench().preload(tmp_path / "rec") == 8 << 20 == cached()        # the runs without --cold: all cached
+
+
+def test_the_paired_ratio_sees_each_repeat_on_its_own_machine_state():
+    """A machine that slows by half for the second repeat: the best runs pair a fast new run with a slow old one
+    (1.5 / 1 = 2x), the back-to-back pairs say 3x in both repeats; samples per second, so the counts weigh."""
+    b = _bench()
+    new_s, old_s = [10.0, 20.0], [30.0, 60.0]
+    assert b.paired_median(new_s, old_s, 60, 60) == 3.0
+    assert b.paired_median([10.0, 10.0, 12.0], [30.0, 40.0, 24.0], 61, 60) == (61 / 10.0) / (60 / 30.0)
