@@ -3,9 +3,9 @@ where that library is not found.
 
 Why not python-zstandard alone: its wheels bundle libzstd 1.5.7 built from C only, while Debian 12's libzstd 1.5.4
 is built with zstd's x86-64 assembly Huffman decoders. On the thermal chunks of this project's simulated full-size
-recording (16-bit frames, ratio 1.95) Debian's library decompresses about 1.25x faster (0.39-0.41 against
-0.32-0.33 GB/s, medians of 9 interleaved rounds over 100 chunks, AMD EPYC Zen 1; the PyPI ``zstd`` package's 1.5.7
-0.32 GB/s). Those chunks are most of an export's index (docs/dataset.md, "Speed and clean stops");
+recording (16-bit frames, ratio 1.95) Debian's library decompresses 1.18-1.25x faster (0.41-0.44 against
+0.35-0.36 GB/s, medians of 9 interleaved rounds over 100 and 300 chunks, on this simulator's and on rosbags' copy of
+it, AMD EPYC Zen 1; the PyPI ``zstd`` and ``pyzstd`` wheels no faster than python-zstandard). Those chunks are most of an export's index (docs/dataset.md, "Speed and clean stops");
 ``bench/bench_dataset.py --zstd`` measures both on a recording's own chunks.
 
 The output is the same bytes either way (zstd's format is one); a damaged frame raises :class:`ZstdError` with
@@ -36,7 +36,7 @@ def _names():
 
 
 def _load():
-    """The system's libzstd with the three functions used here typed, or None."""
+    """The system's libzstd with the functions used here typed, or None."""
     global _lib
     if _lib is None:
         _lib = False
