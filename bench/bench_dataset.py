@@ -266,13 +266,16 @@ def bench_zstd(recording: Path, chunks: int, rounds: int) -> dict:
     import zstandard
     from mcap.reader import make_reader
     from platform_tools.dataset import libzstd, mcapscan
+    from platform_tools.dataset.layout import detect
     from platform_tools.dataset.recording import mcap_files
+    rig = load_rig()
     blobs = []
     for path in mcap_files(recording)[1]:
         with open(path, "rb") as fh:
             summary = make_reader(fh).get_summary()
-            thermal = {cid for cid, c in summary.channels.items() if c.topic.startswith("/thermal/")
-                       and c.topic.endswith("image_raw")}
+            lay = detect(recording, {c.topic for c in summary.channels.values()}, rig)
+            topics = {lay.topics[s] for s in ("thermal_left", "thermal_right") if s in lay.topics}
+            thermal = {cid for cid, c in summary.channels.items() if c.topic in topics}
             for c in sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset):
                 if c.compression == "zstd" and thermal & set(c.message_index_offsets) and len(blobs) < chunks:
                     _, data, size = mcapscan._chunk_records(fh, c)

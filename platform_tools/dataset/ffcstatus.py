@@ -59,19 +59,7 @@ def decode(type_name: str, data):
 def rows(type_name: str, msg, log_ns: int, last_frame_stamp: int | None) -> list[tuple[int, int]]:
     """The ``(stamp ns, ffc_status)`` rows of one decoded status message of type ``type_name``
     (:func:`check_type`'s)."""
-    if type_name == BOOL:
-        stamp = last_frame_stamp if last_frame_stamp is not None else int(log_ns)
-        return [(int(stamp), 2 if bool(msg.data) else 0)]
-    stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-    out = []
-    for st in msg.status:
-        values = {kv.key: kv.value for kv in st.values}
-        if "ffc_status" in values:
-            try:
-                out.append((stamp, int(values["ffc_status"])))
-            except ValueError:
-                continue
-    return out
+    return rows_of(_reduced(type_name, msg), log_ns, last_frame_stamp)
 
 
 class StatusRead(NamedTuple):
@@ -85,11 +73,24 @@ class StatusRead(NamedTuple):
 def read(type_name: str, data) -> StatusRead:
     """One CDR-serialised status message of type ``type_name`` (:func:`check_type`'s) as the index keeps it;
     ValueError when it is cut short. ``rows_of(read(t, data), ...)`` is ``rows(t, decode(t, data), ...)``."""
-    msg = decode(type_name, data)
+    return _reduced(type_name, decode(type_name, data))
+
+
+def _reduced(type_name: str, msg) -> StatusRead:
+    """A decoded status message of type ``type_name`` as :func:`read` gives it: the ``ffc_status`` values that are
+    whole numbers, in order."""
     if type_name == BOOL:
         return StatusRead(None, (2 if bool(msg.data) else 0,), ())
-    return StatusRead(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec,
-                      tuple(v for _, v in rows(type_name, msg, 0, None)), tuple(clock_step_values(msg).items()))
+    ffc = []
+    for st in msg.status:
+        values = {kv.key: kv.value for kv in st.values}
+        if "ffc_status" in values:
+            try:
+                ffc.append(int(values["ffc_status"]))
+            except ValueError:
+                continue
+    return StatusRead(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec, tuple(ffc),
+                      tuple(clock_step_values(msg).items()))
 
 
 def rows_of(status: StatusRead, log_ns: int, last_frame_stamp: int | None) -> list[tuple[int, int]]:

@@ -5,8 +5,9 @@ Why not python-zstandard alone: its wheels bundle libzstd 1.5.7 built from C onl
 is built with zstd's x86-64 assembly Huffman decoders. On the thermal chunks of this project's simulated full-size
 recording (16-bit frames, ratio 1.95) Debian's library decompresses 1.18-1.25x faster (0.41-0.44 against
 0.35-0.36 GB/s, medians of 9 interleaved rounds over 100 and 300 chunks, on this simulator's and on rosbags' copy of
-it, AMD EPYC Zen 1; the PyPI ``zstd`` and ``pyzstd`` wheels no faster than python-zstandard). Those chunks are most of an export's index (docs/dataset.md, "Speed and clean stops");
-``bench/bench_dataset.py --zstd`` measures both on a recording's own chunks.
+it, AMD EPYC Zen 1; the PyPI ``zstd`` and ``pyzstd`` wheels no faster than python-zstandard). Those chunks are
+most of an export's index (docs/dataset.md, "Speed and clean stops"); ``bench/bench_dataset.py --zstd`` measures
+both on a recording's own chunks.
 
 The output is the same bytes either way (zstd's format is one); a damaged frame raises :class:`ZstdError` with
 libzstd's own error name in both.

@@ -59,7 +59,7 @@ def has_chunk_index(summary) -> bool:
     return summary is not None and len(summary.chunk_indexes) > 0
 
 
-def _decompress(compression: str, data, size: int) -> bytes:
+def _decompress(compression: str, data, size: int) -> bytes | memoryview:
     if compression == "":
         return bytes(data)
     if compression == "zstd":

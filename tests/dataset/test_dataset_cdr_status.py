@@ -103,6 +103,16 @@ def test_what_the_workers_send_back_gives_the_rows_the_whole_message_gives(sec, 
     assert pickle.loads(pickle.dumps(got)) == got
     assert ffcstatus.rows_of(got, log_ns, last) == ffcstatus.rows(ffcstatus.DIAGNOSTIC, whole, log_ns, last)
     assert dict(got.clock_steps) == ffcstatus.clock_step_values(whole)
+    # and what they are, from the values hypothesis drew: each status's last ffc_status, where it is a whole number
+    stamp, want = sec * 1_000_000_000 + nanosec, []
+    for *_, values in status:
+        last_ffc = [v for k, v in values if k == "ffc_status"][-1:]
+        for v in last_ffc:
+            try:
+                want.append((stamp, int(v)))
+            except ValueError:
+                pass
+    assert ffcstatus.rows_of(got, log_ns, last) == want
 
 
 @pytest.mark.parametrize("value", [True, False])
