@@ -4,7 +4,7 @@ Each swept cable is exported to STL and read back by trimesh; from the triangles
 call into the check's code) this module finds the tube's two end caps, marches its centre line through plane
 sections, fits circles to the bends, measures its length two ways (the centre line's chords; the volume over
 the cap's area) and tests points inside the tube for containment in other meshes (ray parity, trimesh's ray
-caster with a grid broad phase: no rtree here).
+caster with the grid broad phase of ``tests/cad/trimesh_rays.py``: no rtree here).
 """
 from __future__ import annotations
 
@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 import trimesh
 from trimesh.ray.ray_triangle import ray_triangle_id
+
+from tests.cad.trimesh_rays import TriangleBoxes
 
 #: the cables' STL: finer than the parts' (the centre line and the bends' radii are read off it)
 CABLE_TOLERANCE_MM, CABLE_ANGULAR_RAD = 0.01, 0.1
@@ -49,11 +51,10 @@ def end_caps(mesh: trimesh.Trimesh) -> list[Cap]:
     off = np.einsum("ij,ij->i", n, mesh.triangles_center)
     keys = np.round(np.column_stack([n * 1e3, off * 10]), 0)
     _, inv = np.unique(keys, axis=0, return_inverse=True)
+    inv = inv.ravel()
     caps = []
-    for g in np.unique(inv):
+    for g in np.flatnonzero(np.bincount(inv) >= 8):      # the planes of 8 triangles or more, in order
         idx = np.flatnonzero(inv == g)
-        if len(idx) < 8:
-            continue
         area = float(mesh.area_faces[idx].sum())
         pts = mesh.triangles[idx].reshape(-1, 3)
         width = float(np.ptp(pts, axis=0).max())
@@ -64,12 +65,15 @@ def end_caps(mesh: trimesh.Trimesh) -> list[Cap]:
     return caps
 
 
-def plane_cut(mesh: trimesh.Trimesh, origin: np.ndarray, normal: np.ndarray) -> np.ndarray:
-    """The segments (K, 2, 3) where the plane through ``origin`` with ``normal`` cuts the mesh's triangles."""
-    dv = (mesh.vertices - origin) @ normal                      # signed distance of every vertex
-    d = dv[mesh.faces]                                          # (N, 3)
+def plane_cut(mesh: trimesh.Trimesh, origin: np.ndarray, normal: np.ndarray,
+              faces: np.ndarray | None = None) -> np.ndarray:
+    """The segments (K, 2, 3) where the plane through ``origin`` with ``normal`` cuts the mesh's triangles (those of
+    ``faces``, indices in ascending order, when given: the segments of those triangles, in the same order)."""
+    tri = mesh.triangles if faces is None else mesh.triangles[faces]
+    o, n = origin, normal
+    d = (tri[..., 0] - o[0]) * n[0] + (tri[..., 1] - o[1]) * n[1] + (tri[..., 2] - o[2]) * n[2]   # (N, 3) signed
     cut = (d.min(1) < 0) & (d.max(1) > 0)
-    tri, d = mesh.vertices[mesh.faces[cut]], d[cut]
+    tri, d = tri[cut], d[cut]
     pts = []
     for a, b in ((0, 1), (1, 2), (2, 0)):
         da, db = d[:, a], d[:, b]
@@ -80,6 +84,27 @@ def plane_cut(mesh: trimesh.Trimesh, origin: np.ndarray, normal: np.ndarray) -> 
     pts, ok = pts[ok.sum(1) == 2], ok[ok.sum(1) == 2]           # a plane through a vertex cuts one edge: skip it
     two = np.argsort(~ok, axis=1, kind="stable")[:, :2]         # the two edges the plane crosses
     return np.take_along_axis(pts, two[..., None], axis=1)
+
+
+class NearFaces:
+    """The triangles of a mesh whose boxes meet the cube of half-side ``half_mm`` around a point (ascending
+    indices), each query filtered from the triangles near the last point the box was gathered around (within
+    ``slack_mm`` of it on every axis, so that cube holds the query's): a centre line marches in small steps, and
+    a plane section of the whole mesh at every step was most of the cable tests' time."""
+
+    def __init__(self, mesh: trimesh.Trimesh, half_mm: float, slack_mm: float):
+        tri = mesh.triangles
+        self.lo, self.hi = tri.min(axis=1), tri.max(axis=1)
+        self.half, self.slack = half_mm, slack_mm
+        self.centre: np.ndarray | None = None
+        self.near = np.zeros(0, int)
+
+    def __call__(self, q: np.ndarray) -> np.ndarray:
+        if self.centre is None or np.abs(q - self.centre).max() > self.slack:
+            self.centre, h = np.array(q, float), self.half + self.slack
+            self.near = np.flatnonzero(np.all(self.lo <= q + h, axis=1) & np.all(self.hi >= q - h, axis=1))
+        s = self.near
+        return s[np.all(self.lo[s] <= q + self.half, axis=1) & np.all(self.hi[s] >= q - self.half, axis=1)]
 
 
 def ring_centre(segments: np.ndarray, near: np.ndarray, within_mm: float) -> np.ndarray | None:
@@ -104,13 +129,16 @@ def centreline(mesh: trimesh.Trimesh, step_mm: float = STEP_MM) -> tuple[np.ndar
     a, b = caps
     r = float(np.sqrt((a.area_mm2 + b.area_mm2) / 2 / np.pi))
     pts, d = [a.centre], -a.normal
+    # ring_centre keeps the segments whose middles lie within 1.5 r of the plane's origin: they lie on triangles
+    # whose boxes meet the cube of that half-side, so the section of those triangles alone is the same
+    near = NearFaces(mesh, 1.5 * r, 20 * step_mm)
     for _ in range(100000):
         q = pts[-1] + step_mm * d
         # the next section would reach the far cap's plane, at the far cap (a route may start beyond that plane
         # and come back to it: the power leads into the switch's tabs and the converter's rear end)
         if (q - b.centre) @ b.normal > -step_mm / 2 and np.linalg.norm(q - b.centre) < 2 * r + step_mm:
             break
-        c = ring_centre(plane_cut(mesh, q, d), q, 1.5 * r)
+        c = ring_centre(plane_cut(mesh, q, d, near(q)), q, 1.5 * r)
         if c is None:
             raise ValueError(f"the section {step_mm:g} mm past {np.round(pts[-1], 2).tolist()} finds no tube")
         chord = (c - pts[-1]) / np.linalg.norm(c - pts[-1])
@@ -141,7 +169,7 @@ def circle_through(p: np.ndarray, q: np.ndarray, s: np.ndarray) -> tuple[np.ndar
 def fit_circle(points: np.ndarray) -> tuple[float, np.ndarray]:
     """The least-squares circle (Kasa's algebraic fit) through points (K, 3) in their best plane: radius, centre."""
     c0 = points.mean(axis=0)
-    _, _, vt = np.linalg.svd(points - c0)
+    _, _, vt = np.linalg.svd(points - c0, full_matrices=False)
     uv = (points - c0) @ vt[:2].T
     A = np.column_stack([2 * uv, np.ones(len(uv))])
     sol, *_ = np.linalg.lstsq(A, (uv ** 2).sum(1), rcond=None)
@@ -217,35 +245,7 @@ def inside_points(points: np.ndarray, radius: float, share: float = 0.6, trim_mm
     return np.concatenate([p, p + rr * u, p - rr * u, p + rr * v, p - rr * v])
 
 
-class GridBoxes:
-    """The broad phase trimesh's ray caster asks of an r-tree, over a 2-d grid in x, y of the triangles' boxes:
-    ``bounds`` and ``intersection(box)`` (the triangles whose box meets ``box``)."""
-
-    def __init__(self, tri: np.ndarray, cell_mm: float = 4.0):
-        self.lo, self.hi = tri.min(axis=1), tri.max(axis=1)
-        self.bounds = np.concatenate([self.lo.min(axis=0), self.hi.max(axis=0)])
-        self.cell, self.o = cell_mm, self.bounds[:2]
-        self.cells: dict[tuple[int, int], list[int]] = {}
-        a = np.floor((self.lo[:, :2] - self.o) / cell_mm).astype(int)
-        b = np.floor((self.hi[:, :2] - self.o) / cell_mm).astype(int)
-        for k in range(len(tri)):
-            for i in range(a[k, 0], b[k, 0] + 1):
-                for j in range(a[k, 1], b[k, 1] + 1):
-                    self.cells.setdefault((i, j), []).append(k)
-
-    def intersection(self, box):
-        box = np.asarray(box)
-        a = np.floor((box[:2] - self.o) / self.cell).astype(int)
-        b = np.floor((box[3:5] - self.o) / self.cell).astype(int)
-        cand = {k for i in range(a[0], b[0] + 1) for j in range(a[1], b[1] + 1) for k in self.cells.get((i, j), ())}
-        if not cand:
-            return np.zeros(0, int)
-        c = np.fromiter(cand, int)
-        ok = np.all(self.lo[c] <= box[3:], axis=1) & np.all(self.hi[c] >= box[:3], axis=1)
-        return c[ok]
-
-
-def contains(mesh: trimesh.Trimesh, points: np.ndarray, tree: GridBoxes | None = None) -> np.ndarray:
+def contains(mesh: trimesh.Trimesh, points: np.ndarray, tree: TriangleBoxes | None = None) -> np.ndarray:
     """Which points (K, 3) are inside the closed mesh: an odd count of crossings along ``RAY_DIR`` (trimesh's
     ray-triangle test with every hit, the grid broad phase). Points outside the mesh's box are outside."""
     lo, hi = mesh.bounds
@@ -253,7 +253,7 @@ def contains(mesh: trimesh.Trimesh, points: np.ndarray, tree: GridBoxes | None =
     cand = np.flatnonzero(np.all(points >= lo, axis=1) & np.all(points <= hi, axis=1))
     if len(cand) == 0:
         return out
-    tree = tree or GridBoxes(mesh.triangles)
+    tree = tree or TriangleBoxes(mesh.triangles)
     dirs = np.tile(RAY_DIR, (len(cand), 1))
     _, ray, _ = ray_triangle_id(mesh.triangles, points[cand], dirs, tree=tree, multiple_hits=True,
                                 triangles_normal=mesh.face_normals)

@@ -54,7 +54,7 @@ def _cable(route: Route, tmp) -> Cable:
 class Scene:
     cables: dict[str, Cable]
     parts: dict[str, "trimesh.Trimesh"]
-    trees: dict[str, mc.GridBoxes]
+    trees: dict[str, mc.TriangleBoxes]      # each part's and each cable's broad phase, by name
     brep: object                 # check_cables' result on the same assembly
 
     def part_hits(self, c: Cable) -> dict[str, int]:
@@ -81,7 +81,9 @@ def scene(asm, tmp_path_factory):
     tmp = tmp_path_factory.mktemp("cables_mesh")
     cables = {r.name: _cable(r, tmp) for r in routes(asm)}
     parts = _parts_near(asm, [c.mesh for c in cables.values()], tmp)
-    return Scene(cables, parts, {n: mc.GridBoxes(m.triangles) for n, m in parts.items()}, check_cables(asm))
+    trees = {n: mc.TriangleBoxes(m.triangles) for n, m in parts.items()}
+    trees |= {f"cable {n}": mc.TriangleBoxes(c.mesh.triangles) for n, c in cables.items()}
+    return Scene(cables, parts, trees, check_cables(asm))
 
 
 # ----------------------------------------------------------------------------- the mesh tools on trimesh's own shapes
@@ -181,7 +183,7 @@ def test_no_cable_s_inside_is_inside_a_part_or_another_cable_and_each_plug_ends_
         pts = mc.inside_points(c.points, c.radius_mm)
         for other, o in scene.cables.items():
             if other != name and _harness(o.route) != _harness(c.route):
-                assert not mc.contains(o.mesh, pts).any(), (name, other)
+                assert not mc.contains(o.mesh, pts, scene.trees[f"cable {other}"]).any(), (name, other)
         caps = sorted(mc.end_caps(c.mesh), key=lambda k: np.linalg.norm(k.centre - np.asarray(c.route.points[0])))
         for end, cap, plug in zip(c.route.ends, caps, c.route.plugs):
             if plug:
