@@ -35,6 +35,16 @@ def polydata(vtk, shape, tolerance: float):
     return normals.GetOutput()
 
 
+def node_polydata(vtk, asm: Assembly, node, tolerance: float, meshes: dict):
+    """:func:`polydata` of a node's part in its own frame, tessellated once per part and tolerance: ``meshes``
+    (one dict for every picture of one assembly) keeps them. The guide's pictures re-tessellated every part of
+    every cable picture: about a fifth of a docs build."""
+    key = (id(node.spec), tolerance)
+    if key not in meshes:
+        meshes[key] = polydata(vtk, node.local_shape(asm.cache), tolerance)
+    return meshes[key]
+
+
 def placed_actor(vtk, poly, colour, pose, opacity: float = 1.0):
     """An actor drawing ``poly`` at ``pose`` (a Pose in the rig frame)."""
     mapper = vtk.vtkPolyDataMapper()
@@ -91,19 +101,17 @@ def snapshot(vtk, ren, direction, size, path: Path, *, zoom: float, alpha: bool 
 
 
 def render_views(asm: Assembly, folder: Path, views: dict, exploded: dict, tolerance: float,
-                 size=(1200, 900)) -> list[Path]:
+                 size=(1200, 900), meshes: dict | None = None) -> list[Path]:
+    """``meshes``: :func:`node_polydata`'s, shared with the caller's other pictures of ``asm``."""
     vtk = vtk_module()
     out = []
-    meshes: dict = {}
+    meshes = {} if meshes is None else meshes
     for view, (direction, explode) in views.items():
         ren = vtk.vtkRenderer()
         ren.SetBackground(1, 1, 1)
         for n in asm.nodes:
             pose = exploded[n.name] if explode else n.pose
-            key = id(n.spec)
-            if key not in meshes:
-                meshes[key] = polydata(vtk, n.local_shape(asm.cache), tolerance)
-            ren.AddActor(placed_actor(vtk, meshes[key], n.colour, pose))
+            ren.AddActor(placed_actor(vtk, node_polydata(vtk, asm, n, tolerance, meshes), n.colour, pose))
         p = folder / f"{view}.png"
         snapshot(vtk, ren, direction, size, p, zoom=1.3)
         out.append(p)

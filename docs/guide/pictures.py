@@ -15,20 +15,22 @@ import numpy as np
 from platform_tools.rig.frames import Pose
 
 from cad.geom import bounds_of, moved
-from cad.render import placed_actor, polydata, snapshot, vtk_module
+from cad.render import node_polydata, placed_actor, polydata, snapshot, vtk_module
 
 HIGHLIGHT = (0.12, 0.47, 0.95)   # blue: nothing else in the rig is blue (PETG orange, copper, black parts)
 FADE = 0.6                       # earlier parts: blended this far towards light grey
 
 
-def render_steps(asm, steps, folder: Path, *, size=(960, 640), tolerance: float = 0.25) -> list[Path]:
-    """One PNG per step (``step_NN.png``): nodes so far in the exploded view, the new ones highlighted."""
+def render_steps(asm, steps, folder: Path, *, size=(960, 640), tolerance: float = 0.25,
+                 meshes: dict | None = None) -> list[Path]:
+    """One PNG per step (``step_NN.png``): nodes so far in the exploded view, the new ones highlighted. ``meshes``:
+    the parts' triangles (cad.render.node_polydata), shared with the other pictures of ``asm``."""
     from cad.export import exploded_poses
     vtk = vtk_module()
     folder.mkdir(parents=True, exist_ok=True)
     exploded = exploded_poses(asm)
     nodes = {n.name: n for n in asm.nodes}
-    meshes: dict[int, object] = {}
+    meshes = {} if meshes is None else meshes
     done: list[str] = []
     out = []
     for st in steps:
@@ -39,15 +41,13 @@ def render_steps(asm, steps, folder: Path, *, size=(960, 640), tolerance: float 
         new = set(st.nodes)
         for name in done + st.nodes:
             n = nodes[name]
-            key = id(n.spec)
-            if key not in meshes:
-                meshes[key] = polydata(vtk, n.local_shape(asm.cache), tolerance)
             if name in new:
                 colour, opacity = HIGHLIGHT, 1.0
             else:
                 c = np.asarray(n.colour[:3])
                 colour, opacity = tuple(c * (1 - FADE) + np.array([0.85, 0.86, 0.88]) * FADE), 0.55
-            ren.AddActor(placed_actor(vtk, meshes[key], colour, exploded[name], opacity))
+            ren.AddActor(placed_actor(vtk, node_polydata(vtk, asm, n, tolerance, meshes), colour, exploded[name],
+                                      opacity))
         done.extend(st.nodes)
         p = snapshot(vtk, ren, st.view, size, folder / f"step_{st.number:02d}.png", zoom=1.25, alpha=True)
         st.picture = f"img/{p.name}"
@@ -64,10 +64,11 @@ def render_steps(asm, steps, folder: Path, *, size=(960, 640), tolerance: float 
     return out
 
 
-def render_cables(asm, steps, folder: Path, *, size=(960, 640), tolerance: float = 0.25) -> list[Path]:
+def render_cables(asm, steps, folder: Path, *, size=(960, 640), tolerance: float = 0.25,
+                  meshes: dict | None = None) -> list[Path]:
     """``step_NN_cables.png`` for every step that lays cables: the rig as assembled by then (faded, not
     exploded: cables run between parts in place) and the step's cables, swept, in the highlight colour,
-    framed on them, each labelled with its name and the length bought."""
+    framed on them, each labelled with its name and the length bought. ``meshes``: as :func:`render_steps`'."""
     from cad.bought.cables import cable_table
     from cad.cables import routes, sweep
     vtk = vtk_module()
@@ -75,6 +76,7 @@ def render_cables(asm, steps, folder: Path, *, size=(960, 640), tolerance: float
     nodes = {n.name: n for n in asm.nodes}
     by_name = {r.name: r for r in routes(asm)}
     table = cable_table().kinds
+    meshes = {} if meshes is None else meshes
     done: list[str] = []
     out = []
     for st in steps:
@@ -88,7 +90,7 @@ def render_cables(asm, steps, folder: Path, *, size=(960, 640), tolerance: float
             if n.group == "fasteners":
                 continue
             c = np.asarray(n.colour[:3])
-            ren.AddActor(placed_actor(vtk, polydata(vtk, n.local_shape(asm.cache), tolerance),
+            ren.AddActor(placed_actor(vtk, node_polydata(vtk, asm, n, tolerance, meshes),
                                       tuple(c * (1 - FADE) + np.array([0.85, 0.86, 0.88]) * FADE), n.pose, 0.35))
         boxes = []
         for k, c in enumerate(st.cables):
@@ -157,9 +159,10 @@ def _caption(vtk, c: dict, k: int):
     return cap
 
 
-def render_overview(asm, folder: Path, tolerance: float = 0.25) -> list[Path]:
-    """iso, front, top and exploded views of the whole rig (cad.render's own renderer)."""
+def render_overview(asm, folder: Path, tolerance: float = 0.25, meshes: dict | None = None) -> list[Path]:
+    """iso, front, top and exploded views of the whole rig (cad.render's own renderer); ``meshes``: as
+    :func:`render_steps`'."""
     from cad.export import VIEWS, exploded_poses
     from cad.render import render_views
     folder.mkdir(parents=True, exist_ok=True)
-    return render_views(asm, folder, VIEWS, exploded_poses(asm), tolerance, size=(1000, 750))
+    return render_views(asm, folder, VIEWS, exploded_poses(asm), tolerance, size=(1000, 750), meshes=meshes)

@@ -78,9 +78,10 @@ def write_site(asm, bom: Bom, guide: Guide, stage: Path) -> list[Path]:
     site = dict(nav=NAV)
     files = write_bom(bom, stage, command="docs", site=site, env=env)
     img = stage / "img"
-    files += pictures.render_steps(asm, guide.steps, img)
-    files += pictures.render_cables(asm, guide.steps, img)
-    files += pictures.render_overview(asm, img)
+    meshes: dict = {}                       # each part tessellated once for every picture
+    files += pictures.render_steps(asm, guide.steps, img, meshes=meshes)
+    files += pictures.render_cables(asm, guide.steps, img, meshes=meshes)
+    files += pictures.render_overview(asm, img, meshes=meshes)
     from cad.electrical import power_counts
     (stage / "wiring.svg").write_text(wiring.svg(rig, power_counts(asm)))
     files.append(stage / "wiring.svg")
