@@ -245,6 +245,11 @@ def inside_points(points: np.ndarray, radius: float, share: float = 0.6, trim_mm
     return np.concatenate([p, p + rr * u, p - rr * u, p + rr * v, p - rr * v])
 
 
+def z_boxes(mesh: trimesh.Trimesh) -> TriangleBoxes:
+    """The broad phase :func:`contains` casts its rays (along RAY_DIR, nearly z) through: a grid in x and y."""
+    return TriangleBoxes(mesh.triangles, axes=(0, 1))
+
+
 def contains(mesh: trimesh.Trimesh, points: np.ndarray, tree: TriangleBoxes | None = None) -> np.ndarray:
     """Which points (K, 3) are inside the closed mesh: an odd count of crossings along ``RAY_DIR`` (trimesh's
     ray-triangle test with every hit, the grid broad phase). Points outside the mesh's box are outside."""
@@ -253,7 +258,7 @@ def contains(mesh: trimesh.Trimesh, points: np.ndarray, tree: TriangleBoxes | No
     cand = np.flatnonzero(np.all(points >= lo, axis=1) & np.all(points <= hi, axis=1))
     if len(cand) == 0:
         return out
-    tree = tree or TriangleBoxes(mesh.triangles)
+    tree = tree or z_boxes(mesh)
     dirs = np.tile(RAY_DIR, (len(cand), 1))
     _, ray, _ = ray_triangle_id(mesh.triangles, points[cand], dirs, tree=tree, multiple_hits=True,
                                 triangles_normal=mesh.face_normals)

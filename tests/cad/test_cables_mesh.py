@@ -81,8 +81,8 @@ def scene(asm, tmp_path_factory):
     tmp = tmp_path_factory.mktemp("cables_mesh")
     cables = {r.name: _cable(r, tmp) for r in routes(asm)}
     parts = _parts_near(asm, [c.mesh for c in cables.values()], tmp)
-    trees = {n: mc.TriangleBoxes(m.triangles) for n, m in parts.items()}
-    trees |= {f"cable {n}": mc.TriangleBoxes(c.mesh.triangles) for n, c in cables.items()}
+    trees = {n: mc.z_boxes(m) for n, m in parts.items()}
+    trees |= {f"cable {n}": mc.z_boxes(c.mesh) for n, c in cables.items()}
     return Scene(cables, parts, trees, check_cables(asm))
 
 

@@ -37,11 +37,11 @@ def _triangles(rng, n: int) -> np.ndarray:
 
 
 @settings(max_examples=60, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), n=st.integers(0, 400))
-def test_the_grid_finds_exactly_the_triangles_whose_boxes_meet_the_query(seed, n):
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(0, 400), axes=st.sampled_from([(0, 1, 2), (0, 1), (2,)]))
+def test_the_grid_finds_exactly_the_triangles_whose_boxes_meet_the_query(seed, n, axes):
     rng = np.random.default_rng(seed)
     tri = _triangles(rng, n)
-    grid = TriangleBoxes(tri)
+    grid = TriangleBoxes(tri, axes)
     for _ in range(40):
         lo = rng.uniform(-200, 200, 3)
         box = np.r_[lo, lo + rng.uniform(0, 80, 3) * (rng.uniform(size=3) < 0.7)]    # some queries flat or a point

@@ -2,6 +2,8 @@
 it normally asks for: the broad phase over the triangles' boxes in numpy, on a uniform grid."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from trimesh.ray.ray_triangle import ray_triangle_id
 
@@ -20,13 +22,16 @@ class TriangleBoxes:
     boxes meet it. The same answer as testing every triangle's box (tests/cad/test_trimesh_rays.py), without a pass
     over all of them per ray: that pass was most of the wall and airflow tests' time."""
 
-    def __init__(self, tri: np.ndarray):
+    def __init__(self, tri: np.ndarray, axes: tuple = (0, 1, 2)):
+        """``axes``: those the grid divides (the others are one cell): (0, 1) for rays along z, whose boxes
+        are long in z and would meet a column of cells each."""
         self.lo, self.hi = tri.min(axis=1), tri.max(axis=1)
         self.bounds = np.concatenate([self.lo.min(axis=0), self.hi.max(axis=0)]) if len(tri) else np.zeros(6)
         extent = self.bounds[3:] - self.bounds[:3]
-        self.cell = max(float(extent.max()) / CELLS_ALONG, 1e-6)
+        whole = np.array([d not in axes for d in range(3)])
+        self.cell = max(float(extent[~whole].max()) / CELLS_ALONG, 1e-6)
         while True:
-            self.shape = np.floor(extent / self.cell).astype(int) + 1      # cells per axis
+            self.shape = np.where(whole, 1, np.floor(extent / self.cell).astype(int) + 1)    # cells per axis
             a, b = self._cell(self.lo), self._cell(self.hi)
             span = b - a + 1                                                 # (N, 3) cells each box meets per axis
             count = span.prod(axis=1)
@@ -39,8 +44,11 @@ class TriangleBoxes:
         cell = self._key(a[k, 0] + j // (sy * sz), a[k, 1] + (j // sz) % sy, a[k, 2] + j % sz)
         order = np.lexsort((k, cell))                                        # by cell, then triangle
         cell, self._tri = cell[order], k[order]
-        self._keys, self._starts = np.unique(cell, return_index=True)
-        self._ends = np.r_[self._starts[1:], len(cell)]
+        keys, starts = np.unique(cell, return_index=True)
+        ends = np.r_[starts[1:], len(cell)]
+        #: each cell's triangles (ascending), by cell key; the grid as plain numbers for the per-ray arithmetic
+        self._cells = {int(q): self._tri[s:e] for q, s, e in zip(keys, starts, ends)}
+        self._grid = (tuple(map(float, self.bounds)), self.cell, tuple(map(int, self.shape)))
 
     def _cell(self, p: np.ndarray) -> np.ndarray:
         """The grid cell (..., 3) of points (..., 3), clipped to the grid."""
@@ -50,25 +58,30 @@ class TriangleBoxes:
         return (i * self.shape[1] + j) * self.shape[2] + k
 
     def intersection(self, box) -> np.ndarray:
-        box = np.asarray(box, float)
-        lo, hi = box[:3], box[3:]
-        if len(self.lo) == 0 or np.any(hi < self.bounds[:3]) or np.any(lo > self.bounds[3:]):
+        """Called once per ray by trimesh: the cells in plain Python arithmetic (the same float operations as
+        :meth:`_cell`'s), numpy only for the triangles."""
+        (bx0, by0, bz0, bx1, by1, bz1), cell, (nx, ny, nz) = self._grid
+        x0, y0, z0, x1, y1, z1 = (float(v) for v in box)
+        if not self._cells or x1 < bx0 or y1 < by0 or z1 < bz0 or x0 > bx1 or y0 > by1 or z0 > bz1:
             return np.zeros(0, int)
-        a, b = self._cell(lo), self._cell(hi)
-        i, j, k = np.meshgrid(*(np.arange(a[d], b[d] + 1) for d in range(3)), indexing="ij")
-        keys = self._key(i.ravel(), j.ravel(), k.ravel())
-        at = np.searchsorted(self._keys, keys)
-        found = at[(at < len(self._keys)) & (self._keys[np.minimum(at, len(self._keys) - 1)] == keys)]
-        if len(found) == 0:
+
+        def span(v0, v1, o, n):
+            return (min(max(math.floor((v0 - o) / cell), 0), n - 1), min(max(math.floor((v1 - o) / cell), 0), n - 1))
+
+        (i0, i1), (j0, j1), (k0, k1) = span(x0, x1, bx0, nx), span(y0, y1, by0, ny), span(z0, z1, bz0, nz)
+        cells = self._cells
+        found = [cells[q] for i in range(i0, i1 + 1) for j in range(j0, j1 + 1) for k in range(k0, k1 + 1)
+                 if (q := (i * ny + j) * nz + k) in cells]
+        if not found:
             return np.zeros(0, int)
-        s, n = self._starts[found], self._ends[found] - self._starts[found]
-        listed = self._tri[np.repeat(s - np.cumsum(n) + n, n) + np.arange(n.sum())]     # the cells' lists, end to end
         if len(found) == 1:
-            c = listed
+            c = found[0]
         else:                                                   # each triangle once, in ascending order
             mark = np.zeros(len(self.lo), bool)
-            mark[listed] = True
+            for f in found:
+                mark[f] = True
             c = np.flatnonzero(mark)
+        lo, hi = np.array((x0, y0, z0)), np.array((x1, y1, z1))
         return c[np.all(self.lo[c] <= hi, axis=1) & np.all(self.hi[c] >= lo, axis=1)]
 
 
