@@ -17,9 +17,9 @@ class TriangleBoxes:
     """The broad phase ``ray_triangle_id`` asks of an r-tree: ``bounds`` and ``intersection(box)``, the triangles
     (ascending indices) whose axis-aligned boxes meet a box (x0, y0, z0, x1, y1, z1), over (N, 3, 3) triangles.
 
-    Each triangle is listed in every cell of a uniform grid (cubes of the bounds' longest side over CELLS_ALONG,
-    or larger ones where large triangles would make that more than MAX_ENTRIES entries) that its box meets; a query gathers the triangles of the cells its box meets and keeps those whose
-    boxes meet it. The same answer as testing every triangle's box (tests/cad/test_trimesh_rays.py), without a pass
+    Each triangle is listed in every cell of a uniform grid that its box meets: cubes of the longest gridded side of
+    the bounds over CELLS_ALONG, or larger ones where large triangles would make that more than MAX_ENTRIES entries.
+    A query gathers the triangles of the cells its box meets and keeps those whose boxes meet it. The same answer as testing every triangle's box (tests/cad/test_trimesh_rays.py), without a pass
     over all of them per ray: that pass was most of the wall and airflow tests' time."""
 
     def __init__(self, tri: np.ndarray, axes: tuple = (0, 1, 2)):
@@ -41,21 +41,19 @@ class TriangleBoxes:
         k = np.repeat(np.arange(len(tri)), count)                            # triangle of each (triangle, cell)
         j = np.arange(len(k)) - np.repeat(np.cumsum(count) - count, count)   # its place in the triangle's cells
         sy, sz = span[k, 1], span[k, 2]
-        cell = self._key(a[k, 0] + j // (sy * sz), a[k, 1] + (j // sz) % sy, a[k, 2] + j % sz)
+        nyz = self.shape[1] * self.shape[2]
+        cell = (a[k, 0] + j // (sy * sz)) * nyz + (a[k, 1] + (j // sz) % sy) * self.shape[2] + a[k, 2] + j % sz
         order = np.lexsort((k, cell))                                        # by cell, then triangle
-        cell, self._tri = cell[order], k[order]
+        cell, k = cell[order], k[order]
         keys, starts = np.unique(cell, return_index=True)
         ends = np.r_[starts[1:], len(cell)]
         #: each cell's triangles (ascending), by cell key; the grid as plain numbers for the per-ray arithmetic
-        self._cells = {int(q): self._tri[s:e] for q, s, e in zip(keys, starts, ends)}
+        self._cells = {int(q): k[s:e] for q, s, e in zip(keys, starts, ends)}
         self._grid = (tuple(map(float, self.bounds)), self.cell, tuple(map(int, self.shape)))
 
     def _cell(self, p: np.ndarray) -> np.ndarray:
         """The grid cell (..., 3) of points (..., 3), clipped to the grid."""
         return np.clip(np.floor((p - self.bounds[:3]) / self.cell).astype(int), 0, self.shape - 1)
-
-    def _key(self, i, j, k):
-        return (i * self.shape[1] + j) * self.shape[2] + k
 
     def intersection(self, box) -> np.ndarray:
         """Called once per ray by trimesh: the cells in plain Python arithmetic (the same float operations as
