@@ -63,7 +63,7 @@ def test_trimesh_finds_the_same_hits_through_the_grid_as_through_every_triangle(
     dirs /= np.linalg.norm(dirs, axis=1)[:, None]
     got = ray_hits(mesh.triangles, mesh.face_normals, origins, dirs)
     from trimesh.ray.ray_triangle import ray_triangle_id
-    want = ray_triangle_id(mesh.triangles, origins, dirs, triangles_normal=mesh.face_normals, tree=Brute(mesh.triangles),
-                           multiple_hits=True)
+    want = ray_triangle_id(mesh.triangles, origins, dirs, triangles_normal=mesh.face_normals,
+                           tree=Brute(mesh.triangles), multiple_hits=True)
     key = lambda h: sorted(zip(h[1].tolist(), h[0].tolist()))                     # (ray, triangle) pairs
     assert len(got[0]) > 300 and key(got) == key(want)

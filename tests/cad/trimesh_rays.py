@@ -19,8 +19,9 @@ class TriangleBoxes:
 
     Each triangle is listed in every cell of a uniform grid that its box meets: cubes of the longest gridded side of
     the bounds over CELLS_ALONG, or larger ones where large triangles would make that more than MAX_ENTRIES entries.
-    A query gathers the triangles of the cells its box meets and keeps those whose boxes meet it. The same answer as testing every triangle's box (tests/cad/test_trimesh_rays.py), without a pass
-    over all of them per ray: that pass was most of the wall and airflow tests' time."""
+    A query gathers the triangles of the cells its box meets and keeps those whose boxes meet it. The same answer as
+    testing every triangle's box (tests/cad/test_trimesh_rays.py), without a pass over all of them per ray: that pass
+    was most of the wall and airflow tests' time."""
 
     def __init__(self, tri: np.ndarray, axes: tuple = (0, 1, 2)):
         """``axes``: those the grid divides (the others are one cell): (0, 1) for rays along z, whose boxes
