@@ -46,7 +46,8 @@ import numpy as np
 
 from . import inlet_gap
 from .layout.case import intake_reach_mm
-from .geom import Bounds, bounds_of, box, common_volume_mm3, cylinder
+from .geom import Bounds
+from .solids import bounds_of, box, common_volume_mm3, cylinder
 
 #: the B-rep section is a slab this thin at the wall's mid-plane (its volume / thickness = its area)
 SECTION_MM = 0.02

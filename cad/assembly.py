@@ -18,7 +18,7 @@ from platform_tools.rig import Rig
 
 from .cache import ShapeCache
 from .layout import Layout, layout
-from .geom import moved
+from .solids import moved
 from .parts import camera_mounts, case, cooling, handle, power_mounts
 
 PETG = (0.93, 0.45, 0.10, 1.0)       # printed parts

@@ -20,7 +20,7 @@ import numpy as np
 import yaml
 
 from cad.bought.fasteners import Driver, fastener_table
-from cad.geom import TOUCH_MM3, bounds_of, cylinder
+from cad.solids import TOUCH_MM3, bounds_of, cylinder
 
 from .assembly import Assembly
 

@@ -28,7 +28,8 @@ import cadquery as cq
 import numpy as np
 
 from cad.bought.cables import CableKind, PlugEnvelope, cable_table
-from cad.geom import TOUCH_MM3, Bounds, Vec3, bounds_of, common_volume_mm3, placed_bounds
+from cad.geom import Bounds, Vec3, placed_bounds
+from cad.solids import TOUCH_MM3, bounds_of, box, common_volume_mm3
 
 from .assembly import Assembly
 from .cable_leads import ORIN_HEADER_Y_MM, ORIN_HEADER_Z_MM, button_leads, power_leads
@@ -426,10 +427,10 @@ def cable_report(asm: Assembly, extra_routes: list[Route] = (), only: list[Route
         if hits:
             problems.append(f"cable {r.name} ({r.ends[0]} to {r.ends[1]}) runs through {', '.join(hits)}")
         for what, b in r.envelopes:
-            ph = _hits(b.solid(), shapes, boxes)
+            ph = _hits(box(b), shapes, boxes)
             if ph:
                 problems.append(f"cable {r.name}: its {what} runs into {', '.join(ph)}")
-            swept.append((f"the {what}", _harness(r), b.solid()))
+            swept.append((f"the {what}", _harness(r), box(b)))
         swept.append((f"cable {r.name}", _harness(r), solid))
         bought = pth.bought_mm
         details.append(f"{r.name}: {table[r.kind].description}, {r.ends[0]} -> {r.ends[1]}: {pth.length_mm:.0f} mm + "

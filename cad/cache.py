@@ -27,7 +27,7 @@ from platform_tools.rig.frames import Pose
 log = logging.getLogger("cad.cache")
 REPO = Path(__file__).resolve().parents[1]
 #: modules every builder depends on: a change there invalidates every entry
-SHARED = ("cad.geom", "cad.parts.common", "cad.bought.base", "cad.layout.joints", "cad.layout.handles")
+SHARED = ("cad.geom", "cad.solids", "cad.parts.common", "cad.bought.base", "cad.layout.joints", "cad.layout.handles")
 
 
 def default_dir() -> Path:

@@ -19,7 +19,8 @@ from platform_tools.rig.progress import progress
 
 from .assembly import PRINT_SETUPS, Assembly, Node
 from .layout import fov_half_angles_deg
-from .geom import TOUCH_MM3, Bounds, bounds_of, box, common_volume_mm3
+from .geom import Bounds
+from .solids import TOUCH_MM3, bounds_of, box, common_volume_mm3
 from .parts.common import on_bed
 from cad.bought.fasteners import fastener_table
 

@@ -84,6 +84,18 @@ def assembly_from_args(args, rig=None):
         raise design_error(exc.problems) from None
 
 
+def checked_rig(args):
+    """The rig from the command's options, refused as :func:`rig_from_args` refuses it or as an impossible design
+    (:func:`design_error`) before anything loads CadQuery: the layout and its limits are numbers (cad/geom.py), so
+    a bad ``--set`` is one line in about a second, not after 3 to 4 s of CadQuery's and OpenCascade's imports."""
+    from cad.layout import design_problems
+    rig = rig_from_args(args)
+    problems = design_problems(rig)
+    if problems:
+        raise design_error(problems)
+    return rig
+
+
 def design_error(problems) -> UserError:
     """An impossible design as bad input: one line per problem, each naming the rig key and its limit."""
     return UserError("\n".join(str(p) for p in problems))
@@ -92,7 +104,7 @@ def design_error(problems) -> UserError:
 def replace_refusal(out: Path) -> str | None:
     """Why ``--out`` may not be replaced (one line naming the folder and what in it export did not
     write), or None: ``--out`` never deletes what it did not write."""
-    from cad.export import EXPORT_MARKER, foreign_files
+    from cad.export_folder import EXPORT_MARKER, foreign_files
     foreign = foreign_files(out)
     if not foreign:
         return None
@@ -106,17 +118,19 @@ def replace_refusal(out: Path) -> str | None:
 
 
 def cmd_export(args) -> int:
-    from cad.export import FORMATS, export
+    if args.tolerance <= 0 or args.angular_tolerance <= 0:
+        raise UserError("--tolerance and --angular-tolerance must be > 0 (mm and radians)")
+    from cad.export_folder import FORMATS
     fmt = args.format.upper()
     if fmt != "ALL" and fmt not in FORMATS:
         raise UserError(f"unknown export format {args.format!r}; expected one of {', '.join(FORMATS)} or all")
     formats = set(FORMATS) if fmt == "ALL" else {fmt}
-    if args.tolerance <= 0 or args.angular_tolerance <= 0:
-        raise UserError("--tolerance and --angular-tolerance must be > 0 (mm and radians)")
     refusal = replace_refusal(args.out)
     if refusal:
         raise UserError(refusal)
-    asm = assembly_from_args(args)
+    rig = checked_rig(args)
+    from cad.export import export
+    asm = assembly_from_args(args, rig)
     with OutputDir(args.out) as stage:
         files = export(asm, stage, formats, args.tolerance, args.angular_tolerance)
         refusal = replace_refusal(args.out)     # something put there while the export ran: the stage goes
@@ -131,12 +145,8 @@ def cmd_export(args) -> int:
 
 
 def cmd_check(args) -> int:
+    rig = checked_rig(args)
     from cad.checks import report, run_checks
-    from cad.layout import design_problems
-    rig = rig_from_args(args)
-    problems = design_problems(rig)
-    if problems:
-        raise design_error(problems)
     results = run_checks(assembly_from_args(args, rig))
     text = report(results, verbose=args.verbose > 0)
     if args.report:

@@ -19,7 +19,7 @@ import numpy as np
 from OCP.gp import gp_Pnt
 
 from .assembly import Assembly, Node
-from .geom import bounds_of
+from .solids import bounds_of
 
 #: a B-rep cylinder and a hole of the model are the same feature when their radii agree to this (mm) and
 #: the cylinder's axis passes this close to the hole's origin (mm)

@@ -43,7 +43,7 @@ from OCP.HLRBRep import HLRBRep_Algo, HLRBRep_HLRToShape
 
 from .assembly import Assembly, Node
 from .drawing_holes import HoleMark, _extra_rows, _hole_groups, hole_spacing, holes
-from .geom import bounds_of
+from .solids import bounds_of
 
 #: the sheet (px); the views are fitted into it at one scale
 SHEET_W, SHEET_H = 1400.0, 1000.0

@@ -24,7 +24,8 @@ import cadquery as cq
 import numpy as np
 
 from .assembly import ORIN_NODE
-from .geom import Bounds, bounds_of, box
+from .geom import Bounds
+from .solids import bounds_of, box
 
 #: ray grid: angle step (deg) round the axis, and the height step (mm) in the gap
 RAY_ANGLE_DEG, RAY_HEIGHT_MM = 0.5, 0.25

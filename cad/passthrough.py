@@ -18,7 +18,8 @@ from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
 import cadquery as cq
 
-from cad.geom import TOUCH_MM3, Bounds, bounds_of, box, common_volume_mm3, cylinder, moved
+from cad.geom import Bounds
+from cad.solids import TOUCH_MM3, bounds_of, box, common_volume_mm3, cylinder, moved
 
 from .assembly import Assembly
 from .assembly_order import load_steps

@@ -7,13 +7,15 @@ A bought part is a frozen dataclass of plain numbers, so its ``repr`` is a compl
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import cadquery as cq
+from typing import TYPE_CHECKING
 
 from platform_tools.rig import Rig
 from platform_tools.rig.schema import Sourced
 
 from cad.geom import Bounds, Vec3
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 Colour = tuple[float, float, float, float]
 
@@ -62,7 +64,8 @@ class BoughtPart:
         return Bounds.centred((0.0, 0.0, 0.0), self.size)
 
     def build(self) -> cq.Shape:
-        return self.bounds().solid()
+        from cad.solids import box
+        return box(self.bounds())
 
 
 def part_colour(kind: str) -> Colour:

@@ -9,14 +9,16 @@ not used: the camera is clamped in its copper heat sink).
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import cadquery as cq
+from typing import TYPE_CHECKING
 
 from platform_tools.rig.frames import T_BODY_OPTICAL, Pose
 from platform_tools.rig import Rig
 
-from cad.geom import Bounds, cylinder
+from cad.geom import Bounds
 from cad.bought.base import BoughtPart, envelope, part_colour
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 
 @dataclass(frozen=True)
@@ -69,4 +71,5 @@ class BosonLens(BoughtPart):
         return Bounds((self.front_mm - self.size[0], -r, -r), (self.front_mm, r, r))
 
     def build(self) -> cq.Shape:
+        from cad.solids import cylinder
         return cylinder(self.diameter_mm, self.size[0], (self.front_mm - self.size[0], 0, 0), (1, 0, 0))

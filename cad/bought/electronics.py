@@ -8,13 +8,15 @@ threads (``parts.dc_converter.mounting``) are tapped in its base plate (not cut 
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import cadquery as cq
+from typing import TYPE_CHECKING
 
 from platform_tools.rig import Rig
 
-from cad.geom import Bounds, cylinder
+from cad.geom import Bounds
 from cad.bought.base import BoughtPart, envelope, part_colour
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 
 @dataclass(frozen=True)
@@ -84,12 +86,13 @@ class FuseHolder(BoxPart):
         return Bounds((-half, -y / 2, 0.0), (half, y / 2, z))
 
     def build(self) -> cq.Shape:
+        from cad.solids import box, cylinder
         x, _, _ = self.size
         w = self.tab_width_mm
-        tabs = Bounds((-x / 2, -w / 2, 0.0), (x / 2, w / 2, self.tab_mm)).solid()
+        tabs = box(Bounds((-x / 2, -w / 2, 0.0), (x / 2, w / 2, self.tab_mm)))
         for u, v, _ in self.mount_points():
             tabs = tabs.cut(cylinder(self.hole_d_mm, self.tab_mm + 0.2, (u, v, -0.1)))
-        return tabs.fuse(self.body().solid()).clean()
+        return tabs.fuse(box(self.body())).clean()
 
 
 @dataclass(frozen=True)
@@ -123,11 +126,12 @@ class BoardPart(BoughtPart):
         return Bounds((-half, -y / 2, self.board_mm), (half, y / 2, z))
 
     def build(self) -> cq.Shape:
+        from cad.solids import box, cylinder
         x, y, _ = self.size
-        board = Bounds((-x / 2, -y / 2, 0.0), (x / 2, y / 2, self.board_mm)).solid()
+        board = box(Bounds((-x / 2, -y / 2, 0.0), (x / 2, y / 2, self.board_mm)))
         for u, v, _ in self.mount_points():
             board = board.cut(cylinder(self.hole_d_mm, self.board_mm + 0.2, (u, v, -0.1)))
-        return board.fuse(self.components().solid()).clean()
+        return board.fuse(box(self.components())).clean()
 
 
 @dataclass(frozen=True)

@@ -8,13 +8,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-
-import cadquery as cq
+from typing import TYPE_CHECKING
 
 from platform_tools.rig import Rig
 
-from cad.geom import Bounds, cylinder
+from cad.geom import Bounds
 from cad.bought.base import BoughtPart, envelope, part_colour
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 
 @dataclass(frozen=True)
@@ -49,8 +51,9 @@ class BlowerFan(BoughtPart):
         return [tuple(p) for p in self.hole_uv_mm]
 
     def build(self) -> cq.Shape:
+        from cad.solids import box, cylinder
         x, y, z = self.size
-        body = self.bounds().solid()
+        body = box(self.bounds())
         body = body.cut(cylinder(self.inlet_diameter_mm, 0.6, (0, 0, z / 2 - 0.6)))
         for u, v in self.holes():
             body = body.cut(cylinder(self.hole_diameter_mm, z, (u, v, -z / 2)))

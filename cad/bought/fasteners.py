@@ -15,17 +15,17 @@ import math
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Annotated, Mapping, Optional
-
-import cadquery as cq
+from typing import TYPE_CHECKING, Annotated, Mapping, Optional
 
 from platform_tools.rig import Rig
 from platform_tools.rig.problems import InputProblems
 from platform_tools.rig.typed import Gt
 from platform_tools.rig.yamlsource import load_typed
 
-from cad.geom import cylinder, tube
 from cad.bought.base import BoughtPart, envelope, part_colour
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 TABLE = Path(__file__).resolve().with_name("fasteners.yaml")
 
@@ -142,6 +142,7 @@ class Screw(BoughtPart):
         return f"{self.part_id}:{self.thread}x{self.length_mm:g}"
 
     def build(self) -> cq.Shape:
+        from cad.solids import cylinder
         head = cylinder(self.head_diameter_mm, self.head_height_mm, (0, 0, 0))
         shank = cylinder(self.diameter_mm, self.length_mm, (0, 0, -self.length_mm))
         return head.fuse(shank).clean()
@@ -179,10 +180,12 @@ class Insert(BoughtPart):
         return self.length_mm + self.hole_extra_depth_mm
 
     def build(self) -> cq.Shape:
+        from cad.solids import tube
         return tube(self.outer_diameter_mm, self.bore_mm, self.length_mm, (0, 0, -self.length_mm))
 
     def hole(self) -> cq.Shape:
         """The printed hole it is melted into (in the insert's frame)."""
+        from cad.solids import cylinder
         return cylinder(self.hole_diameter_mm, self.hole_depth_mm + 0.01, (0, 0, -self.hole_depth_mm))
 
     def melt_volume_mm3(self) -> float:
@@ -224,6 +227,8 @@ class Standoff(BoughtPart):
         return math.pi / 4 * self.diameter_mm ** 2 * self.stud_mm
 
     def build(self) -> cq.Shape:
+        import cadquery as cq
+        from cad.solids import cylinder
         body = cq.Workplane("XY").polygon(6, self.across_corners_mm).extrude(self.length_mm).val()
         stud = cylinder(self.diameter_mm, self.stud_mm, (0, 0, -self.stud_mm))
         return body.fuse(stud).clean()

@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-
-import cadquery as cq
+from typing import TYPE_CHECKING
 
 from platform_tools.rig import Rig
 
-from cad.geom import cylinder
 from cad.bought.base import BoughtPart, envelope, part_colour
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 #: the dome narrows to this fraction of the body's width where the cable leaves it
 DOME_TIP_RATIO = 0.6
@@ -53,6 +54,8 @@ class CableGland(BoughtPart):
 
     def build(self) -> cq.Shape:
         """Body, dome, thread and the locknut tightened against the wall's inner face, bored for the cable."""
+        import cadquery as cq
+        from cad.solids import cylinder
         h = self.body_height_mm
         body = cylinder(self.body_d_mm, h * 0.4, (0, 0, -h * 0.4))
         dome = cq.Solid.makeCone(DOME_TIP_RATIO * self.body_d_mm / 2, self.body_d_mm / 2, h * 0.6,

@@ -7,13 +7,15 @@ Its top face is fixed by M3 screws (the adapter's own threads; positions are a d
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import cadquery as cq
+from typing import TYPE_CHECKING
 
 from platform_tools.rig import Rig
 
 from cad.geom import Bounds
 from cad.bought.base import BoughtPart, envelope, part_colour
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 
 @dataclass(frozen=True)
@@ -34,7 +36,8 @@ class MakitaAdapter(BoughtPart):
         return Bounds((-x / 2, -y / 2, 0.0), (x / 2, y / 2, z))
 
     def build(self) -> cq.Shape:
+        from cad.solids import box
         x, y, _ = self.size
         slot = Bounds((-x / 2, -self.t_slot_width_mm / 2, 0.0), (x / 2, self.t_slot_width_mm / 2,
                                                                  self.t_slot_depth_mm))
-        return self.bounds().solid().cut(slot.solid())
+        return box(self.bounds()).cut(box(slot))

@@ -6,13 +6,15 @@ Frame: origin at the centre of its top face (where it meets the dock adapter); t
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import cadquery as cq
+from typing import TYPE_CHECKING
 
 from platform_tools.rig import Rig
 
 from cad.geom import Bounds
 from cad.bought.base import BoughtPart, envelope, part_colour
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 
 @dataclass(frozen=True)
@@ -28,4 +30,6 @@ class MakitaBattery(BoughtPart):
         return Bounds((-x / 2, -y / 2, -z), (x / 2, y / 2, 0.0))
 
     def build(self) -> cq.Shape:
-        return cq.Workplane().add(self.bounds().solid()).edges("|X").fillet(min(self.size[1:]) * 0.08).val()
+        import cadquery as cq
+        from cad.solids import box
+        return cq.Workplane().add(box(self.bounds())).edges("|X").fillet(min(self.size[1:]) * 0.08).val()

@@ -9,13 +9,15 @@ A switch's bezel is its own outline over the panel (``dims.bezel_width_mm`` x ``
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import cadquery as cq
+from typing import TYPE_CHECKING
 
 from platform_tools.rig import Rig
 
-from cad.geom import Bounds, cylinder
+from cad.geom import Bounds
 from cad.bought.base import BoughtPart, envelope, part_colour
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 BEZEL_MM = 2.0   # bezel thickness in front of the panel (drawn only; its outline is the envelope's)
 
@@ -49,11 +51,12 @@ class PanelPart(BoughtPart):
 
     def cutout(self, margin: float = 0.0, depth: float | None = None) -> cq.Shape:
         """The hole in the panel (grown by ``margin`` per side), through the panel thickness."""
+        from cad.solids import box, cylinder
         depth = self.panel_mm if depth is None else depth
         w, h = self.cutout_mm
         if self.round_cutout:
             return cylinder(w + 2 * margin, depth + 0.2, (-depth - 0.1, 0, 0), (1, 0, 0))
-        return Bounds((-depth - 0.1, -w / 2 - margin, -h / 2 - margin), (0.1, w / 2 + margin, h / 2 + margin)).solid()
+        return box(Bounds((-depth - 0.1, -w / 2 - margin, -h / 2 - margin), (0.1, w / 2 + margin, h / 2 + margin)))
 
     def front_mm(self) -> tuple[float, float]:
         """The outline in front of the panel, (width along y, height along z): the bezel's, or the body's."""
@@ -71,6 +74,7 @@ class PanelPart(BoughtPart):
         return Bounds((-self.panel_mm - x, -y / 2, -z / 2), (-self.panel_mm, y / 2, z / 2))
 
     def build(self) -> cq.Shape:
+        from cad.solids import box, cylinder
         x, y, z = self.size
         w, h = self.cutout_mm
         if self.round_cutout:
@@ -79,8 +83,8 @@ class PanelPart(BoughtPart):
             front_d = self.stick_out_d_mm or min(y, z)
             front = cylinder(front_d, self.stick_out_mm, (0, 0, 0), (1, 0, 0))
         else:
-            body = Bounds((-self.panel_mm - x, -y / 2, -z / 2), (-self.panel_mm, y / 2, z / 2)).solid()
-            neck = Bounds((-self.panel_mm, -w / 2, -h / 2), (0.0, w / 2, h / 2)).solid()
+            body = box(Bounds((-self.panel_mm - x, -y / 2, -z / 2), (-self.panel_mm, y / 2, z / 2)))
+            neck = box(Bounds((-self.panel_mm, -w / 2, -h / 2), (0.0, w / 2, h / 2)))
             fy, fz = self.front_mm()
-            front = Bounds((0.0, -fy / 2, -fz / 2), (self.stick_out_mm, fy / 2, fz / 2)).solid()
+            front = box(Bounds((0.0, -fy / 2, -fz / 2), (self.stick_out_mm, fy / 2, fz / 2)))
         return body.fuse(neck, front).clean()

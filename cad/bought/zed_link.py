@@ -8,13 +8,15 @@ holes, like the envelope and its placement on the devkit, are estimates (see doc
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import cadquery as cq
+from typing import TYPE_CHECKING
 
 from platform_tools.rig import Rig
 
-from cad.geom import Bounds, cylinder
+from cad.geom import Bounds
 from cad.bought.base import BoughtPart, envelope, part_colour
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 
 @dataclass(frozen=True)
@@ -42,8 +44,9 @@ class ZedLinkQuad(BoughtPart):
         return [(u, v, 0.0) for u, v in self.mount_uv_mm]
 
     def build(self) -> cq.Shape:
+        from cad.solids import box, cylinder
         x, y, z = self.size
-        shape = self.bounds().solid()
+        shape = box(self.bounds())
         for u, v, _ in self.mount_points():
             shape = shape.cut(cylinder(self.hole_d_mm, self.board_mm + 0.2, (u, v, -0.1)))
             shape = shape.cut(cylinder(self.keepout_mm, z, (u, v, self.board_mm)))

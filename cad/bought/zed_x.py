@@ -8,14 +8,16 @@ thread(s) of ``parts.zed_x.mounting``, positions from the bottom face's centre.
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-import cadquery as cq
+from typing import TYPE_CHECKING
 
 from platform_tools.rig.frames import T_BODY_OPTICAL, Pose
 from platform_tools.rig import Rig
 
-from cad.geom import Bounds, cylinder
+from cad.geom import Bounds
 from cad.bought.base import BoughtPart, envelope, part_colour
+
+if TYPE_CHECKING:
+    import cadquery as cq
 
 
 @dataclass(frozen=True)
@@ -41,8 +43,10 @@ class ZedX(BoughtPart):
         return Bounds((self.front_mm - x, -y / 2, -z / 2), (self.front_mm, y / 2, z / 2))
 
     def build(self) -> cq.Shape:
+        import cadquery as cq
+        from cad.solids import box, cylinder
         b = self.bounds()
-        body = b.solid()
+        body = box(b)
         r = min(self.size[2] / 2 - 0.5, 6.0)
         body = cq.Workplane().add(body).edges("|X").fillet(r).val()
         # the lens windows: shallow recesses in the front face, one per optical centre

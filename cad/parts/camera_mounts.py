@@ -11,7 +11,8 @@ import cadquery as cq
 
 from ..layout import Hole, Layout
 from ..layout.boson_clamp import place_boson_clamps
-from ..geom import Bounds, box, cut_all, fuse_all, one_solid
+from ..geom import Bounds
+from ..solids import box, cut_all, fuse_all, one_solid
 from .common import PrintSetup, hole_tools
 
 

@@ -18,7 +18,8 @@ import numpy as np
 from ..layout import Hole, Layout, fov_half_angles_deg
 from ..layout.case import front_ledge_chamfer, lug_spot_face
 from ..layout.constants import HOLE_LEAD_MM
-from ..geom import Bounds, box, cylinder, moved
+from ..geom import Bounds
+from ..solids import box, cylinder, moved
 from .common import PrintSetup, hole_tools
 
 

@@ -9,7 +9,7 @@ import numpy as np
 from platform_tools.rig.frames import Pose
 
 from ..layout import Hole
-from ..geom import cylinder
+from ..solids import cylinder
 
 
 def hole_tools(holes: tuple[Hole, ...], pose_in_part: Pose | None = None) -> list[cq.Shape]:
@@ -35,7 +35,7 @@ class PrintSetup:
 
 def on_bed(shape: cq.Shape, setup: PrintSetup, bed_mm: tuple[float, float, float]) -> tuple[cq.Shape, Pose]:
     """The part in its print orientation, resting on z = 0 and centred on the bed; and that pose."""
-    from ..geom import moved
+    from ..solids import moved
     rot = Pose.from_xyz_rpy_deg((0, 0, 0), setup.rpy_deg)
     s = moved(shape, rot)
     bb = s.BoundingBox()

@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import cadquery as cq
 
 from ..layout import Hole, Layout
-from ..geom import Bounds, box, cut_all, cylinder, fuse_all, one_solid
+from ..geom import Bounds
+from ..solids import box, cut_all, cylinder, fuse_all, one_solid
 from .common import PrintSetup, hole_tools
 
 

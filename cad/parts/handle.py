@@ -9,7 +9,8 @@ from dataclasses import dataclass
 import cadquery as cq
 
 from ..layout import HandleGeometry, Layout
-from ..geom import Bounds, box, cut_all, cylinder, fuse_all, one_solid
+from ..geom import Bounds
+from ..solids import box, cut_all, cylinder, fuse_all, one_solid
 from .common import PrintSetup
 
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from platform_tools.rig.frames import Pose
 
-from cad.geom import bounds_of, moved
+from cad.solids import bounds_of, moved
 from cad.render import node_polydata, placed_actor, polydata, snapshot, vtk_module
 
 HIGHLIGHT = (0.12, 0.47, 0.95)   # blue: nothing else in the rig is blue (PETG orange, copper, black parts)

@@ -261,7 +261,7 @@ def test_a_round_post_hides_its_arc_on_both_readings():
     """A 6 mm post 40 mm from the fan's axis hides 2 asin(3/40) of the turn over its 15 mm: on the
     cylinder of R = 30 mm, 15 x 30 x 2 asin(3 / 40) = 67.5 mm^2 (the B-rep from OpenCascade's solid, the
     rays from a mesh trimesh makes)."""
-    from cad.geom import cylinder
+    from cad.solids import cylinder
     from cad.inlet_gap import brep_blocked_mm2, gap_reading, mesh_blocked_mm2
     gap = _gap()
     expect = 15.0 * 30.0 * 2 * math.asin(3.0 / 40.0)
@@ -279,7 +279,7 @@ def test_a_round_post_hides_its_arc_on_both_readings():
 @pytest.mark.slow
 def test_posts_ringed_close_round_the_fan_fail_naming_them():
     """Twelve 5.8 mm posts 34 mm out hide over half the side: the rule fails, naming them, on both readings."""
-    from cad.geom import cylinder
+    from cad.solids import cylinder
     from cad.inlet_gap import gap_problems, gap_reading
     gap = _gap()
     pts = [(34 * math.cos(a), 34 * math.sin(a)) for a in np.arange(12) * math.pi / 6]

@@ -7,7 +7,8 @@ import pytest
 from cad import checks
 from cad.assembly_order import STEPS, load_steps
 from cad.bought.fasteners import fastener_table
-from cad.geom import Bounds, bounds_of, box
+from cad.geom import Bounds
+from cad.solids import bounds_of, box
 
 #: issue 16 item 4, measured on the model before the fix: the dock screws' heads (top face) and the
 #: Orin's underside (mm, rig z)

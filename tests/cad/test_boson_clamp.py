@@ -18,7 +18,8 @@ from cad.assembly import assembly_tree
 from cad.assembly_order import driver_paths, load_steps
 from cad.bought.fasteners import fastener_table
 from cad.datums import camera_locations, clamp_problems, removes_claimed
-from cad.geom import Bounds, bounds_of, moved
+from cad.geom import Bounds
+from cad.solids import bounds_of, moved
 from cad.layout import DesignError
 from cad.layout.boson_clamp import CLAMP_THREAD, place_boson_clamps
 from cad.parts.common import on_bed

@@ -10,7 +10,7 @@ import pytest
 
 from cad.bought.cables import cable_table
 from cad.cables import Route, centreline, path_of, routes, sweep
-from cad.geom import bounds_of
+from cad.solids import bounds_of, box
 
 KINDS = cable_table().kinds
 
@@ -148,8 +148,8 @@ def test_the_rear_port_leads_pass_and_their_plugs_stand_clear_of_the_rear_wall(a
     for r in leads:
         assert r.envelopes, r.name
         for what, b in r.envelopes:
-            assert b.solid().distance(shapes["case_lower"]) >= asm.layout.fits.clear - 1e-6, what
-            assert b.solid().distance(shapes["jetson_agx_orin"]) < 1e-6, what
+            assert box(b).distance(shapes["case_lower"]) >= asm.layout.fits.clear - 1e-6, what
+            assert box(b).distance(shapes["jetson_agx_orin"]) < 1e-6, what
         assert r.ends[1 if r.name.startswith("usb") else 0] == "jetson_agx_orin"
     # the USB leads bend at the lead's minimum radius on the wire OpenCascade holds
     for r in leads[:2]:

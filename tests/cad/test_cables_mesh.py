@@ -65,7 +65,7 @@ class Scene:
 
 
 def _parts_near(asm, meshes, tmp) -> dict[str, "trimesh.Trimesh"]:
-    from cad.geom import bounds_of
+    from cad.solids import bounds_of
     out = {}
     for n in asm.nodes:
         s = n.shape(asm.cache)

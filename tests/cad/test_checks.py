@@ -6,7 +6,8 @@ import pytest
 
 from cad import checks
 from cad.assembly import Assembly
-from cad.geom import Bounds, box
+from cad.geom import Bounds
+from cad.solids import box
 
 #: every test needs the built CAD assembly: the quick loop (make test-fast) leaves them to make test
 pytestmark = pytest.mark.slow

@@ -102,7 +102,7 @@ def test_a_mount_without_its_lip_fails_the_check(asm):
 @pytest.mark.slow
 def test_the_heat_sink_has_its_stop_and_the_boson_touches_it(asm):
     # independent of the datum model: the copper in front of the Boson's front face, read off the solids
-    from cad.geom import bounds_of
+    from cad.solids import bounds_of
     lay = asm.layout
     hs = asm.node("heat_sink_left").shape(asm.cache)
     core_front = lay.cameras.thermal["left"].pose.apply(np.array([lay.cameras.core.bounds().hi[0], 0, 0]))[0]

@@ -246,7 +246,7 @@ def test_a_previous_export_alone_is_replaced(previous_export, tmp_path):
 def test_an_older_export_without_a_manifest_falls_back_to_the_patterns(tmp_path):
     """An export from before the manifest (its marker is one line of text): the export's file patterns
     say what it may hold."""
-    from cad.export import foreign_files
+    from cad.export_folder import foreign_files
     out = tmp_path / "old"
     (out / "views").mkdir(parents=True)
     (out / "printed").mkdir()
@@ -276,7 +276,8 @@ def test_a_file_added_while_exporting_stops_the_swap(tmp_path, monkeypatch):
         return [stage / "views" / "iso.svg"]
 
     monkeypatch.setattr(cad.export, "export", fake_export)
-    monkeypatch.setattr(cad.cli, "assembly_from_args", lambda args: None)
+    monkeypatch.setattr(cad.cli, "checked_rig", lambda args: None)
+    monkeypatch.setattr(cad.cli, "assembly_from_args", lambda args, rig=None: None)
     args = argparse.Namespace(format="SVG", out=out, tolerance=0.1, angular_tolerance=0.2, json=False, quiet=True)
     with pytest.raises(UserError, match="notes.txt"):
         cad.cli.cmd_export(args)

@@ -7,7 +7,7 @@ from OCP.TopAbs import TopAbs_IN
 
 from cad.assembly import build, camera_frames
 from cad.layout import design_problems, layout
-from cad.geom import bounds_of
+from cad.solids import bounds_of
 from platform_tools.rig import load_rig
 
 
@@ -123,3 +123,25 @@ def test_the_rear_wall_stands_the_deepest_rear_plug_behind_the_devkit(rig, monke
     moved = build_layout(rig, C)
     assert moved.compute.orin_box.lo[0] - moved.case.interior.lo[0] == pytest.approx(20.0 + lay.fits.clear)
     assert moved.compute.orin_box == lay.compute.orin_box and moved.power.converter_box == lay.power.converter_box
+
+
+def test_the_layout_and_its_limits_are_computed_without_cadquery(repo):
+    """The layout, its design problems, the datums and the export folder's rules are numbers: a fresh process that
+    makes them (what ``params`` and every refused ``--set`` do) loads neither CadQuery nor OpenCascade, and the
+    parts' shapes still build once something asks for them."""
+    import subprocess
+    import sys
+    code = ("import sys\n"
+            "from platform_tools.rig import load_rig\n"
+            "from cad.layout import design_problems, layout\n"
+            "from cad.datums import camera_locations\n"
+            "from cad.export_folder import FORMATS, foreign_files\n"
+            "rig = load_rig()\n"
+            "lay = layout(rig)\n"
+            "assert camera_locations(lay) and not design_problems(rig)\n"
+            "print(sorted(m for m in ('cadquery', 'OCP') if m in sys.modules))\n"
+            "print(lay.joints[0].screw.build().isValid())\n"
+            "print('cadquery' in sys.modules)\n")
+    r = subprocess.run([sys.executable, "-c", code], cwd=repo, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["[]", "True", "True"], r.stdout

@@ -9,7 +9,8 @@ import pytest
 from cad import checks
 from cad.assembly_order import load_steps
 from cad.electrical import electrical_checks, gland_check
-from cad.geom import Bounds, box, moved
+from cad.geom import Bounds
+from cad.solids import box, moved
 from platform_tools.rig.loader import load_rig
 
 pytestmark = pytest.mark.slow
@@ -72,7 +73,7 @@ def test_fuse_holder_stands_on_its_bosses(asm, rig, tmp_path):
     exported STL (trimesh: a boss ring around an insert hole of the insert's table diameter under each tab
     hole) and in the joints (a screw down through each tab into an insert of the boss)."""
     from OCP.BRepExtrema import BRepExtrema_DistShapeShape
-    from cad.geom import common_volume_mm3
+    from cad.solids import common_volume_mm3
     lay = asm.layout
     p, floor, ins = lay.power, lay.case.interior.lo[2], lay.fits.insert
     fuse, tray = asm.node("blade_fuse").shape(asm.cache), asm.node("case_lower").shape(asm.cache)
