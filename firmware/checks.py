@@ -15,6 +15,7 @@ import yaml
 
 from platform_tools.rig.checks import FAILED, OK, SKIPPED, Check
 from platform_tools.rig import Rig
+from platform_tools.rig.yamlsource import safe_load
 from firmware import budget, health_topics, privilege, v4l2
 from firmware.context import L4T_RELEASES, build_context
 from firmware.launch_stub import ExecuteProcess, Node, load_launch_file
@@ -59,7 +60,7 @@ def _seconds(value) -> float:
 
 def check_compose_matches_rig(folder: Path, rig: Rig) -> Check:
     """What the compose file must say for this rig: the stop grace, devices, the data drive."""
-    doc = yaml.safe_load((folder / "compose.yaml").read_text())
+    doc = safe_load((folder / "compose.yaml").read_text())
     ctx = build_context(rig)
     services = doc.get("services", {})
     problems = []
@@ -111,7 +112,7 @@ def check_params(folder: Path) -> Check:
         if f.name == "rig.yaml":
             continue
         try:
-            doc = yaml.safe_load(f.read_text())
+            doc = safe_load(f.read_text())
             if not isinstance(doc.get("/**", {}).get("ros__parameters"), dict):
                 bad.append(f"{f.name}: no /**: ros__parameters mapping")
         except (yaml.YAMLError, AttributeError) as exc:
@@ -148,7 +149,7 @@ def check_launch(folder: Path, rig: Rig) -> Check:
         if len(cam) != 1:
             problems.append(f"{t['name']}: {len(cam)} nodes")
             continue
-        params = yaml.safe_load(_params_file(folder, cam[0].kwargs["parameters"][0]).read_text())
+        params = safe_load(_params_file(folder, cam[0].kwargs["parameters"][0]).read_text())
         p = params["/**"]["ros__parameters"]
         if p.get("video_device") != t["devices"]["video"] or p.get("frame_id") != t["frame_id"]:
             problems.append(f"{t['name']}: parameters do not name {t['devices']['video']} / {t['frame_id']}")
@@ -280,7 +281,7 @@ def check_dockerfiles(folder: Path, rig: Rig) -> Check:
     except ImportError:
         return Check("dockerfiles", SKIPPED, "dockerfile-parse is not installed (pip install dockerfile-parse)")
     images = build_context(rig)["images"]
-    doc = yaml.safe_load((folder / "compose.yaml").read_text())
+    doc = safe_load((folder / "compose.yaml").read_text())
     problems, built = [], {}
     for svc_name, svc in (doc.get("services") or {}).items():
         build = svc.get("build")

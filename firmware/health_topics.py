@@ -12,6 +12,7 @@ from firmware.device import health
 from firmware.device.topics import health_cameras, recorded_topics
 from platform_tools.rig import Rig
 from platform_tools.rig.checks import FAILED, OK, Check
+from platform_tools.rig.yamlsource import safe_load
 
 NODE_MODULE = "firmware.device.health_node"
 CONFIG = "config/health.yaml"
@@ -20,7 +21,7 @@ CONFIG = "config/health.yaml"
 def check_health_topics(folder: Path, rig: Rig) -> Check:
     problems = []
     try:
-        params = yaml.safe_load((folder / CONFIG).read_text())["/**"]["ros__parameters"]
+        params = safe_load((folder / CONFIG).read_text())["/**"]["ros__parameters"]
     except (OSError, yaml.YAMLError, KeyError, TypeError) as exc:
         return Check("health topics", FAILED, f"{CONFIG}: {type(exc).__name__}: {exc}")
     recorded = set(recorded_topics(rig))
@@ -37,7 +38,7 @@ def check_health_topics(folder: Path, rig: Rig) -> Check:
                 problems.append(f"{cam}: publishes {kind} on {topic}, upstream names it {want}")
             if topic not in recorded:
                 problems.append(f"{topic} is not in the recorded topic list")
-    svc = ((yaml.safe_load((folder / "compose.yaml").read_text()) or {}).get("services") or {}).get(HEALTH_SERVICE)
+    svc = ((safe_load((folder / "compose.yaml").read_text()) or {}).get("services") or {}).get(HEALTH_SERVICE)
     command = [str(c) for c in (svc or {}).get("command") or []]
     if NODE_MODULE not in command or f"/{CONFIG}" not in command:
         problems.append(f"compose service {HEALTH_SERVICE} does not run {NODE_MODULE} with /{CONFIG}")

@@ -10,10 +10,10 @@ import configparser
 import re
 from pathlib import Path
 
-import yaml
 
 from platform_tools.rig.checks import FAILED, OK, Check
 from platform_tools.rig import Rig
+from platform_tools.rig.yamlsource import safe_load
 from firmware.context import build_context
 
 #: host paths no confined service may mount: the device tree, the kernel's views, the Docker socket
@@ -33,7 +33,7 @@ _VERIFIED = re.compile(r"sha256sum\s+-c|gpg\s+--show-keys[^&]*fpr")
 
 
 def _services(folder: Path) -> dict:
-    return (yaml.safe_load((folder / "compose.yaml").read_text()) or {}).get("services") or {}
+    return (safe_load((folder / "compose.yaml").read_text()) or {}).get("services") or {}
 
 
 def _host_path(volume) -> str:

@@ -23,10 +23,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-import yaml
 
 from platform_tools.rig import Rig
 from platform_tools.rig.checks import FAILED, OK, Check
+from platform_tools.rig.yamlsource import safe_load
 
 
 @dataclass(frozen=True)
@@ -99,11 +99,11 @@ def check_controls(folder: Path, rig: Rig, thermal_names: list[str]) -> Check:
     """No rendered thermal configuration writes a V4L2 control the rig did not ask for: an integer control
     set (or left to usb_cam's default) fails; a boolean one passes only when the guard is mounted."""
     allowed = allowed_v4l2(rig)
-    compose = yaml.safe_load((folder / "compose.yaml").read_text()) or {}
+    compose = safe_load((folder / "compose.yaml").read_text()) or {}
     guard_ok = (folder / GUARD_FILE).is_file()
     problems = []
     for name in thermal_names:
-        p = (yaml.safe_load((folder / "config" / f"{name}.yaml").read_text()) or {})
+        p = (safe_load((folder / "config" / f"{name}.yaml").read_text()) or {})
         p = p.get("/**", {}).get("ros__parameters", {})
         vols = [str(v) for v in compose.get("services", {}).get(name, {}).get("volumes", [])]
         guarded = guard_ok and any(v.split(":")[1:2] == [GUARD_MOUNT] for v in vols)

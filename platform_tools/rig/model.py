@@ -7,6 +7,7 @@ the synthetic cameras and the on-device configuration all read them from here.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import math
@@ -99,7 +100,12 @@ class Rig:
     # ------------------------------------------------------------------ frames
     def sensor_frames(self) -> dict[str, SensorFrame]:
         """Every sensor frame in the rig frame: the ZED X centre, its left/right optical frames and
-        IMU, and the two thermal cameras with their optical frames."""
+        IMU, and the two thermal cameras with their optical frames. A new dict each call, of the frames
+        computed once per rig (both are immutable: the firmware's render asked for them 108 times, 0.85 s)."""
+        return dict(self._sensor_frames)
+
+    @functools.cached_property
+    def _sensor_frames(self) -> dict[str, SensorFrame]:
         s = self.desc.sensors
         frames: dict[str, SensorFrame] = {}
 

@@ -88,3 +88,17 @@ def test_export_into_a_file_path_exit_2(tmp_path: Path, platform_tools):
     assert r.returncode == 2, r.stderr
     assert "afile" in r.stderr and "Traceback" not in r.stderr
     assert f.read_text() == "x"
+
+
+def test_sensor_frames_are_computed_once_and_handed_out_as_a_new_dict():
+    """The frames are computed once per rig (the firmware's render asks 108 times), but each call gets its own dict:
+    what one caller removes the next still gets; another rig (another override) has its own frames."""
+    rig = load_rig()
+    first = rig.sensor_frames()
+    del first["thermal_left"]
+    again = rig.sensor_frames()
+    assert "thermal_left" in again and again is not first
+    assert again["zed_x"] is rig.sensor_frames()["zed_x"]
+    wider = load_rig(overrides=["sensors.thermal.baseline_mm=130"])
+    assert wider.frame("thermal_left").t[1] - rig.frame("thermal_left").t[1] == pytest.approx(
+        (130 - rig.desc.sensors.thermal.baseline_mm) / 2)

@@ -71,3 +71,38 @@ def test_libyamls_message_when_only_libyaml_refuses(monkeypatch):
 
     message = load_with(Refuses, monkeypatch, "a: 1\n")
     assert message == "f.yaml:3:5: malformed YAML: libyaml's own words"
+
+
+def rendered_firmware_yaml(tmp_path_factory) -> list[Path]:
+    from firmware.render import write
+    from platform_tools.rig import load_rig
+    out = tmp_path_factory.mktemp("fw") / "fw"
+    write(load_rig(), out)
+    return sorted(out.rglob("*.yaml"))
+
+
+def test_safe_load_reads_what_pyyaml_reads(tmp_path_factory):
+    """safe_load (libyaml) gives yaml.safe_load's data for every YAML file of the repository and of a rendered
+    firmware folder, the files it reads."""
+    files = repository_yaml_files() + rendered_firmware_yaml(tmp_path_factory)
+    assert any(f.name == "compose.yaml" for f in files)
+    for path in files:
+        text = path.read_text()
+        try:
+            pure = yaml.safe_load(text)
+        except yaml.YAMLError as exc:        # a custom tag: refused both ways, with the same words
+            with pytest.raises(yaml.YAMLError) as got:
+                yamlsource.safe_load(text)
+            assert str(got.value) == str(exc), path
+            continue
+        assert yamlsource.safe_load(text) == pure, path
+
+
+@pytest.mark.parametrize("name", sorted(BROKEN))
+def test_safe_load_refuses_a_broken_text_with_pyyamls_message(name):
+    text, words = BROKEN[name]
+    with pytest.raises(yaml.YAMLError) as pure:
+        yaml.safe_load(text)
+    with pytest.raises(yaml.YAMLError) as fast:
+        yamlsource.safe_load(text)
+    assert words in str(fast.value) and str(fast.value) == str(pure.value)
