@@ -27,6 +27,12 @@ near side by up to half a pixel. At the rig's resolutions (thermal 640x512) that
 algorithm in plain numpy (``np.minimum.at`` / ``np.add.at``): the reference the bench and tests
 compare with.
 
+Every kernel is compiled with numba's ``error_model="numpy"``: a division is the IEEE one (what numpy does), with no
+test of its divisor for zero and no ZeroDivisionError to raise. The divisors here are positive where a result is
+kept (a point's depth in front of the camera, a pixel's weight above ``min_coverage``'s), so the results are the same
+to the bit (the bench's export outputs against b7c0534's; tests/dataset/test_dataset_register.py against plain
+numpy); the projection of the points is 1.1x faster (30.9 -> 28.0 ms a view, best of 8, the bench's box scene).
+
 Lens models projected in numba: LENSMODEL_PINHOLE, LENSMODEL_STEREOGRAPHIC (the nominal Boson) and
 LENSMODEL_OPENCV4/5/8 (what a calibration solves); any other mrcal model goes through
 ``mrcal.project`` (same result, slower).
@@ -52,7 +58,7 @@ def _padded(intrinsics: np.ndarray) -> np.ndarray:
     return k
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _project(kind, k, x, y, z):
     if kind == 0:
         return k[0] * x / z + k[2], k[1] * y / z + k[3]
@@ -69,7 +75,7 @@ def _project(kind, k, x, y, z):
     return k[0] * xpp + k[2], k[1] * ypp + k[3]
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _corner(u0, v0, fu, fv, corner):
     """Pixel (column, row) and bilinear weight of neighbour ``corner`` (0..3: du = corner & 1, dv = corner >> 1)
     of a point at (u0 + fu, v0 + fv), u0 and v0 whole, fu and fv in [0, 1)."""
@@ -78,19 +84,19 @@ def _corner(u0, v0, fu, fv, corner):
     return u0 + du, v0 + dv, (fv if dv else 1.0 - fv) * (fu if du else 1.0 - fu)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _inside(u0, v0, out_w, out_h):
     """Whether all four neighbours of a point at (u0 + fu, v0 + fv) lie inside an ``out_w`` x ``out_h`` image."""
     return 0 <= u0 and u0 + 1 < out_w and 0 <= v0 and v0 + 1 < out_h
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _weights(fu, fv):
     """The bilinear weights of the four neighbours in :func:`_corner`'s order, as the same products."""
     return (1.0 - fv) * (1.0 - fu), (1.0 - fv) * fu, fv * (1.0 - fu), fv * fu
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _points_compact(depth, rays, R, t, kind, k, qext, out_w, out_h, uvz, idx):
     """Thermal pixel coordinates and depth of the ZED pixels in view (with depth, in front, projecting inside), in
     pixel order: ``uvz[j]`` (u, v, z) of ZED pixel ``idx[j]`` (flattened); returns how many."""
@@ -124,7 +130,7 @@ def _points_compact(depth, rays, R, t, kind, k, qext, out_w, out_h, uvz, idx):
     return n
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _splat_packed(uvz, idx, n, src, out_h, out_w, tol, zbuf, packed):
     """The two passes over the ``n`` points in view: pass 0 into the z-buffer ``zbuf`` (h, w; +inf on entry), pass 1
     into ``packed`` (h, w, C + 2; 0 on entry, C-contiguous): the C colour sums, the weight sum, the weighted depth
@@ -178,7 +184,7 @@ def _splat_packed(uvz, idx, n, src, out_h, out_w, tol, zbuf, packed):
                 packed[vv, uu, C + 1] += w * z
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _blend3(uvz, idx, n, src, out_h, out_w, tol, zbuf, flat):
     """Pass 1 of :func:`_splat_packed` for three colours, into its accumulator flattened (``flat``: h * w * 5): each
     point's colour read once, a corner's five sums at one computed offset. The same products and additions in the
@@ -210,7 +216,7 @@ def _blend3(uvz, idx, n, src, out_h, out_w, tol, zbuf, flat):
                 _add5(flat, vv * row + uu * 5, w, z, zbuf[vv, uu] * (1.0 + tol), b, g, r)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _add5(flat, p, w, z, zmax, b, g, r):
     """One corner of :func:`_blend3`: the five sums at ``flat[p:p + 5]`` when the weight is positive and the point
     is on the nearest surface (``z <= zmax``)."""
@@ -336,7 +342,7 @@ class Images:
     fraction: float         # valid pixels / all pixels
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _finish_u8(packed, min_weight, image, mask, depth_mm):
     """:func:`_finish` then the export's conversions, per pixel with the same float32 steps, from the packed
     accumulator (:func:`_splat_packed`); returns the count of valid pixels."""
