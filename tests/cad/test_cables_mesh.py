@@ -76,14 +76,15 @@ def _parts_near(asm, meshes, tmp) -> dict[str, "trimesh.Trimesh"]:
 
 
 @pytest.fixture(scope="module")
-def scene(asm, tmp_path_factory):
-    from cad.checks import check_cables
+def scene(asm, results, tmp_path_factory):
+    """The cables' and nearby parts' meshes, beside check_cables' result on the same rig (the suite's shared run of
+    every check, tests/cad/conftest.py, rather than a second one of its own)."""
     tmp = tmp_path_factory.mktemp("cables_mesh")
     cables = {r.name: _cable(r, tmp) for r in routes(asm)}
     parts = _parts_near(asm, [c.mesh for c in cables.values()], tmp)
     trees = {n: mc.z_boxes(m) for n, m in parts.items()}
     trees |= {f"cable {n}": mc.z_boxes(c.mesh) for n, c in cables.items()}
-    return Scene(cables, parts, trees, check_cables(asm))
+    return Scene(cables, parts, trees, results["cables"])
 
 
 # ----------------------------------------------------------------------------- the mesh tools on trimesh's own shapes
