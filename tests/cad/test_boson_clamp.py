@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 
-from cad import checks, geom
+from cad import checks
 from cad.assembly import assembly_tree
 from cad.assembly_order import driver_paths, load_steps
 from cad.bought.fasteners import fastener_table
 from cad.datums import camera_locations, clamp_problems, removes_claimed
 from cad.geom import Bounds
-from cad.solids import bounds_of, moved
+from cad.solids import TOUCH_MM3, bounds_of, moved
 from cad.layout import DesignError
 from cad.layout.boson_clamp import CLAMP_THREAD, place_boson_clamps
 from cad.parts.common import on_bed
@@ -77,7 +77,7 @@ def test_the_plate_and_its_screws_clash_with_nothing_and_engage_their_threads(as
                 hosts.add(other.name)
                 assert abs(v - intended[key][0]) <= 0.05 * intended[key][0], (name, other.name, v, intended[key])
             else:
-                assert v <= geom.TOUCH_MM3, (name, other.name, v)
+                assert v <= TOUCH_MM3, (name, other.name, v)
     assert hosts == {f"{p}_{s}" for p in ("boson", "heat_sink") for s in SIDES}
 
 
