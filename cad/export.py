@@ -13,7 +13,7 @@ from platform_tools.rig.frames import Pose
 from platform_tools.rig.progress import progress
 
 from .assembly import PRINT_SETUPS, Assembly, assembly_tree, camera_frames
-from .export_folder import EXPORT_MARKER, FORMATS, write_manifest
+from .export_folder import EXPORT_MARKER, write_manifest
 from .parts.common import on_bed
 from .solids import location, moved
 

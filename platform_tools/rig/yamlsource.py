@@ -49,28 +49,28 @@ class YamlSource:
 _FAST_PARSER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
-def _compose(text: str) -> yaml.Node | None:
+def _parsed(parse: Callable, text: str) -> Any:
+    """``parse(text, Loader=...)`` (yaml.compose or yaml.load) with libyaml's parser; a text libyaml refuses is
+    parsed again by PyYAML's own, so that the error raised carries PyYAML's message (see :data:`_FAST_PARSER`)."""
     try:
-        return yaml.compose(text, Loader=_FAST_PARSER)
+        return parse(text, Loader=_FAST_PARSER)
     except yaml.YAMLError:
         if _FAST_PARSER is yaml.SafeLoader:
             raise
-        yaml.compose(text, Loader=yaml.SafeLoader)  # raises with PyYAML's message
+        parse(text, Loader=yaml.SafeLoader)  # raises with PyYAML's message
         raise  # PyYAML's parser accepted what libyaml refused: libyaml's message
+
+
+def _compose(text: str) -> yaml.Node | None:
+    return _parsed(yaml.compose, text)
 
 
 def safe_load(text: str) -> Any:
     """``yaml.safe_load(text)`` through libyaml's parser (:data:`_FAST_PARSER`: a rendered firmware folder's 8
     YAML files, 54 kB, load in 24 against 202 ms), the same data; a text libyaml refuses raises PyYAML's message,
-    as :func:`_compose` does. For YAML whose key lines nobody needs (rendered configuration): the rig and the
+    as the rig loader's does. For YAML whose key lines nobody needs (rendered configuration): the rig and the
     tables go through :func:`load_yaml_text`, which keeps them."""
-    try:
-        return yaml.load(text, Loader=_FAST_PARSER)
-    except yaml.YAMLError:
-        if _FAST_PARSER is yaml.SafeLoader:
-            raise
-        yaml.safe_load(text)  # raises with PyYAML's message
-        raise  # PyYAML's parser accepted what libyaml refused: libyaml's message
+    return _parsed(yaml.load, text)
 
 
 def _walk(node: yaml.Node, path: KeyPath, lines: dict, file: Path) -> Any:
