@@ -23,8 +23,8 @@ def polydata(vtk, shape, tolerance: float):
     pts.SetData(numpy_to_vtk(np.array([v.toTuple() for v in verts], dtype=float).reshape(-1, 3), deep=True))
     t = np.asarray(tris, dtype=np.int64).reshape(-1, 3)
     cells = vtk.vtkCellArray()
-    conn = np.hstack([np.full((len(t), 1), 3, dtype=np.int64), t]).ravel()
-    cells.SetCells(len(t), numpy_to_vtkIdTypeArray(conn, deep=True))
+    offsets = np.arange(0, 3 * len(t) + 1, 3, dtype=np.int64)     # VTK 9's layout: offsets and connectivity
+    cells.SetData(numpy_to_vtkIdTypeArray(offsets, deep=True), numpy_to_vtkIdTypeArray(t.ravel(), deep=True))
     poly = vtk.vtkPolyData()
     poly.SetPoints(pts)
     poly.SetPolys(cells)
