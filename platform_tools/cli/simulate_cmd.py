@@ -5,7 +5,6 @@ import argparse
 from pathlib import Path
 
 from ..sim.timeline import SimParams
-from ..sim.writer import simulate
 from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, print_json,
     rig_from_args)
 
@@ -36,6 +35,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if not 0.0 <= args.drop_probability < 0.5:
         raise UserError(f"--drop-probability {args.drop_probability:g}: expected 0 to 0.5")
     rig = rig_from_args(args)
+    from ..sim.writer import simulate    # here: OpenCV, mcap and the scene's geometry load only for this command
     truth = simulate(rig, args.out, SimParams(args.duration, args.seed, args.drop_probability), args.scale)
     if args.json:
         print_json({"out": str(args.out), "truth": truth})

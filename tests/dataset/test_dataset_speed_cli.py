@@ -56,3 +56,16 @@ def test_export_starts_without_the_other_commands_modules():
     got = json.loads(subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
                                     text=True).stdout)
     assert got == ["platform_tools.cli.export_cmd", "platform_tools.cli.main"]
+
+
+@pytest.mark.slow
+def test_help_starts_without_opencv_or_the_simulators_writer():
+    """A fresh interpreter building every command's parser (``platform_tools --help``) has not imported OpenCV,
+    SciPy or the simulator's writer (its scene geometry and calibration targets: 0.15 s of every command's start
+    before simulate_cmd imported it only when it runs)."""
+    code = ("import json, sys; from platform_tools.cli.main import build_parser; build_parser(); "
+            "print(json.dumps(sorted(m for m in sys.modules if m.split('.')[0] in ('cv2', 'scipy', 'calibration') or "
+            "m.startswith('platform_tools.sim.writer'))))")
+    got = json.loads(subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
+                                    text=True).stdout)
+    assert got == []
