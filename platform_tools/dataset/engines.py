@@ -247,6 +247,31 @@ def stdlib_distutils():
         sys.meta_path[:0] = [f for f in hooks if f not in sys.meta_path]
 
 
+#: what numba's array functions import, when the first kernel loads numba's registries, to ask whether np.dot may
+#: call BLAS (numba.np.arraymath's _check_blas): it imports scipy.linalg whole, 0.16 of a worker's 0.5 s of CPU
+#: warming up (py-spy of a full-size export at 1 Hz, then timed alone, 2026-12-05). No kernel of this package calls
+#: BLAS; where the import fails numba uses its own loop for the one function that check gates (np.vdot's inner product)
+BLAS_PROBE = "scipy.linalg.cython_blas"
+
+
+def numba_without_blas_probe() -> bool:
+    """Import numba's array functions (numba.np.arraymath) with BLAS_PROBE unimportable, so that loading numba's
+    registries does not import scipy.linalg: once per process, before its first kernel (:func:`.chunk.warm_up`).
+    Nothing where either is imported already; a numba whose arraymath cannot import without the probe imports it
+    later as usual, with it. True when numba's arraymath was imported without the probe."""
+    if BLAS_PROBE in sys.modules or "numba.np.arraymath" in sys.modules:
+        return False
+    sys.modules[BLAS_PROBE] = None          # an import of it raises ImportError (the import system's documented rule)
+    try:
+        import numba.np.arraymath  # noqa: F401 - for its import-time check, made without scipy.linalg
+        return True
+    except ImportError:
+        return False
+    finally:
+        if BLAS_PROBE in sys.modules and sys.modules[BLAS_PROBE] is None:
+            del sys.modules[BLAS_PROBE]
+
+
 @contextlib.contextmanager
 def _opencv_single_threaded():
     """OpenCV's thread pool stopped (``cv2.setNumThreads(1)`` joins its threads) while workers are forked, then set

@@ -418,3 +418,60 @@ def test_a_worker_whose_warm_up_ends_first_starts_the_tasks_without_waiting_for_
     assert all(t["at"] >= warms[t["pid"]]["end"] for t in tasks)     # none ran cold
     early = [t for t in tasks if t["at"] < slow["end"]]
     assert early and all(t["pid"] != slow["pid"] for t in early)     # the other worker did not wait for it
+
+
+def test_the_warm_up_loads_numbas_registries_without_scipy_linalg_and_the_outputs_stay_the_same(sim, tmp_path):
+    """Fresh processes, each warming up then exporting the simulated recording inline: the warm-up's process never
+    imports scipy.linalg (numba's BLAS probe, engines.numba_without_blas_probe), even after the export; a process
+    that imported the probe first (numba's usual start: its BLAS check passes) writes the same images, byte for
+    byte."""
+    code = (
+        "import json, sys\n"
+        "from pathlib import Path\n"
+        "if sys.argv[3] == 'probe':\n"
+        "    import scipy.linalg.cython_blas\n"
+        "from platform_tools.dataset import chunk\n"
+        "from platform_tools.dataset.export import Params, export\n"
+        "from platform_tools.rig import load_rig\n"
+        "chunk.warm_up()\n"
+        "import numba.np.arraymath\n"
+        "rig = load_rig()\n"
+        "export([Path(sys.argv[1])], Path(sys.argv[2]), rig, Params.from_rig(rig, rate_hz=2), engine='inline')\n"
+        "print(json.dumps({'blas': numba.np.arraymath._HAVE_BLAS, 'scipy.linalg': 'scipy.linalg' in sys.modules}))\n")
+    got, images = {}, {}
+    for how in ("probe", "none"):
+        out = tmp_path / how
+        r = subprocess.run([sys.executable, "-c", code, str(sim[0]), str(out), how], cwd=REPO,
+                           capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, r.stderr
+        got[how] = json.loads(r.stdout.strip().splitlines()[-1])
+        images[how] = {p.relative_to(out): p.read_bytes() for p in out.rglob("*")
+                       if p.suffix in (".png", ".jpg", ".npy")}
+    assert got == {"probe": {"blas": True, "scipy.linalg": True}, "none": {"blas": False, "scipy.linalg": False}}
+    assert len(images["none"]) > 20
+    assert images["none"] == images["probe"]
+
+
+def test_the_blas_probe_is_never_left_unimportable():
+    """numba_without_blas_probe in fresh processes: it does nothing where numba's arraymath is imported already, and
+    where that import fails (a numba that needs the probe, stood in for by a finder refusing arraymath) the probe is
+    importable again after it."""
+    code = (
+        "import json, sys\n"
+        "from platform_tools.dataset import engines\n"
+        "class Refuse:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'numba.np.arraymath':\n"
+        "            raise ImportError('stand-in: a numba whose arraymath needs the probe')\n"
+        "if sys.argv[1] == 'fails':\n"
+        "    sys.meta_path.insert(0, Refuse())\n"
+        "else:\n"
+        "    import numba.np.arraymath\n"
+        "first = engines.numba_without_blas_probe()\n"
+        "left = sys.modules.get(engines.BLAS_PROBE, 'absent')\n"
+        "print(json.dumps([first, left if left in ('absent', None) else 'module']))\n")
+    # imported already: numba imported the probe itself, and it stays as it was
+    for how, want in (("fails", [False, "absent"]), ("imported", [False, "module"])):
+        r = subprocess.run([sys.executable, "-c", code, how], cwd=REPO, capture_output=True, text=True, timeout=120)
+        assert r.returncode == 0, r.stderr
+        assert json.loads(r.stdout.strip().splitlines()[-1]) == want, how
