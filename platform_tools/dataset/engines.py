@@ -247,10 +247,11 @@ def stdlib_distutils():
         sys.meta_path[:0] = [f for f in hooks if f not in sys.meta_path]
 
 
-#: what numba's array functions import, when the first kernel loads numba's registries, to ask whether np.dot may
-#: call BLAS (numba.np.arraymath's _check_blas): it imports scipy.linalg whole, 0.16 of a worker's 0.5 s of CPU
-#: warming up (py-spy of a full-size export at 1 Hz, then timed alone, 2026-12-05). No kernel of this package calls
-#: BLAS; where the import fails numba uses its own loop for the one function that check gates (np.vdot's inner product)
+#: what numba's array functions import, when the first kernel loads numba's registries, to ask whether BLAS is there
+#: (numba.np.arraymath's _check_blas): it imports scipy.linalg whole, 0.16 of a worker's 0.5 s of CPU warming up
+#: (py-spy of a full-size export at 1 Hz, then timed alone, 2026-12-05). No kernel of this package calls BLAS; where
+#: the import fails numba uses its own loop for the one thing that check gates (np.correlate's and np.convolve's
+#: inner product); np.dot and np.linalg ask for BLAS again when they are compiled (numba.np.linalg.ensure_blas)
 BLAS_PROBE = "scipy.linalg.cython_blas"
 
 
