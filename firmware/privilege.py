@@ -10,7 +10,6 @@ import configparser
 import re
 from pathlib import Path
 
-
 from platform_tools.rig.checks import FAILED, OK, Check
 from platform_tools.rig import Rig
 from platform_tools.rig.yamlsource import safe_load

@@ -23,7 +23,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-
 from platform_tools.rig import Rig
 from platform_tools.rig.checks import FAILED, OK, Check
 from platform_tools.rig.yamlsource import safe_load
