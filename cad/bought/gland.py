@@ -55,11 +55,10 @@ class CableGland(BoughtPart):
     def build(self) -> cq.Shape:
         """Body, dome, thread and the locknut tightened against the wall's inner face, bored for the cable."""
         import cadquery as cq
-        from cad.solids import cylinder
+        from cad.solids import cone, cylinder
         h = self.body_height_mm
         body = cylinder(self.body_d_mm, h * 0.4, (0, 0, -h * 0.4))
-        dome = cq.Solid.makeCone(DOME_TIP_RATIO * self.body_d_mm / 2, self.body_d_mm / 2, h * 0.6,
-                                 cq.Vector(0, 0, -h), cq.Vector(0, 0, 1))
+        dome = cone(DOME_TIP_RATIO * self.body_d_mm, self.body_d_mm, h * 0.6, (0, 0, -h))
         thread = cylinder(self.thread_d_mm, self.thread_length_mm)
         nut = cq.Workplane().polygon(6, self.nut_d_mm).extrude(self.nut_height_mm).val() \
             .translate(cq.Vector(0, 0, self.wall_mm))

@@ -83,7 +83,7 @@ class PanelPart(BoughtPart):
             front_d = self.stick_out_d_mm or min(y, z)
             front = cylinder(front_d, self.stick_out_mm, (0, 0, 0), (1, 0, 0))
         else:
-            body = box(Bounds((-self.panel_mm - x, -y / 2, -z / 2), (-self.panel_mm, y / 2, z / 2)))
+            body = box(self.body_bounds())
             neck = box(Bounds((-self.panel_mm, -w / 2, -h / 2), (0.0, w / 2, h / 2)))
             fy, fz = self.front_mm()
             front = box(Bounds((0.0, -fy / 2, -fz / 2), (self.stick_out_mm, fy / 2, fz / 2)))

@@ -17,20 +17,24 @@ def _triangle_area_mm2(points: np.ndarray, cells: np.ndarray) -> float:
     return float(0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
 
 
-def test_a_box_is_twelve_triangles_with_its_area_and_bounds(vtk):
-    box = cq.Workplane().box(30, 20, 10).val()
-    poly = polydata(vtk, box, 0.1)
-    assert poly.GetNumberOfPolys() == 12
-    assert poly.GetBounds() == pytest.approx((-15, 15, -10, 10, -5, 5))
+def _points_and_triangles(vtk, poly) -> tuple[np.ndarray, np.ndarray]:
+    """(points (N, 3), triangles (M, 3) of point indices) of a VTK polydata; every cell must be a triangle."""
     from vtk.util.numpy_support import vtk_to_numpy
-    points = vtk_to_numpy(poly.GetPoints().GetData())
     ids = vtk.vtkIdList()
     cells = []
     for i in range(poly.GetNumberOfCells()):
         poly.GetCellPoints(i, ids)
         assert ids.GetNumberOfIds() == 3
         cells.append([ids.GetId(j) for j in range(3)])
-    assert _triangle_area_mm2(points, np.array(cells)) == pytest.approx(box.Area(), rel=1e-9)
+    return vtk_to_numpy(poly.GetPoints().GetData()), np.array(cells)
+
+
+def test_a_box_is_twelve_triangles_with_its_area_and_bounds(vtk):
+    box = cq.Workplane().box(30, 20, 10).val()
+    poly = polydata(vtk, box, 0.1)
+    assert poly.GetNumberOfPolys() == 12
+    assert poly.GetBounds() == pytest.approx((-15, 15, -10, 10, -5, 5))
+    assert _triangle_area_mm2(*_points_and_triangles(vtk, poly)) == pytest.approx(box.Area(), rel=1e-9)
 
 
 def test_a_cylinder_keeps_every_triangle_of_its_tessellation(vtk):
@@ -38,14 +42,7 @@ def test_a_cylinder_keeps_every_triangle_of_its_tessellation(vtk):
     verts, tris = cyl.tessellate(0.05, 0.3)
     poly = polydata(vtk, cyl, 0.05)
     assert poly.GetNumberOfPolys() == len(tris)
-    from vtk.util.numpy_support import vtk_to_numpy
     # the normals filter may split vertices at sharp edges, so compare areas, not indices
-    points = vtk_to_numpy(poly.GetPoints().GetData())
-    ids = vtk.vtkIdList()
-    cells = []
-    for i in range(poly.GetNumberOfCells()):
-        poly.GetCellPoints(i, ids)
-        cells.append([ids.GetId(j) for j in range(3)])
     want = _triangle_area_mm2(np.array([v.toTuple() for v in verts]), np.asarray(tris))
-    assert _triangle_area_mm2(points, np.array(cells)) == pytest.approx(want, rel=1e-12)
+    assert _triangle_area_mm2(*_points_and_triangles(vtk, poly)) == pytest.approx(want, rel=1e-12)
     assert want == pytest.approx(cyl.Area(), rel=0.01)
