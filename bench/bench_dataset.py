@@ -15,7 +15,8 @@
    beside this tree's, on the same recording, alternating, after one untimed warm-up each at 0.25 Hz (numba
    compiles into each tree's cache); samples/s end to end (wall clock, indexing included) and the ratios, and the
    CPU seconds of each run (the command and its workers: what a shared machine's other load disturbs least); then
-   every file of each previous output compared with this tree's (bytes; PNGs that differ are decoded and compared). Each
+   every file of each previous output compared with this tree's (bytes; PNGs that differ are decoded and compared);
+   each run writes into a new folder, all deleted when the bench ends (why: ``bench_export``). Each
    run's 1-minute load average, as it starts, is printed beside it (the machine may be shared). This tree runs
    with its default workers (forked on Linux); ``--spawn`` runs it again with spawned workers
    (``PLATFORM_TOOLS_EXPORT_WORKERS=spawn``) as ``new-spawn``, ``--fork`` with forked ones as ``new-fork`` (the
@@ -112,9 +113,9 @@ def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int
     (user + system, of the command and its workers: getrusage of reaped children) is the figure a shared machine
     disturbs least: other users' load stretches the wall clock, not the work done."""
     import resource
-    import shutil
     import subprocess
-    shutil.rmtree(out, ignore_errors=True)
+    if out.exists():
+        raise SystemExit(f"{out}: exists; each run writes into a new folder (see bench_export)")
     ru = resource.getrusage(resource.RUSAGE_CHILDREN)
     env = dict(os.environ, PYTHONPATH=str(tree))
     for var in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", FORK_ENV):
@@ -219,7 +220,16 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
                  fork: bool = False, spawn: bool = False, cold: bool = False) -> dict:
     """``spawn`` / ``fork``: this tree a second time with its workers spawned ("new-spawn") / forked ("new-fork"),
     each run beside the others. ``cold``: the recording evicted from the page cache before each timed run
-    (:func:`evict`)."""
+    (:func:`evict`).
+
+    Every run writes into a folder of its own, and none is deleted before the bench ends: on an ext4 file system
+    without a journal (this project's machines: ``journal_task`` <none> in /sys/fs/ext4/DEV), a new inode is not
+    given a number freed in the last 60 s (360 s while its inode table block is dirty); ext4's ``recently_deleted``
+    test in ``find_inode_bit`` reads and skips each one. Deleting a run's output (743 files at 1 Hz) just before the
+    next run made each new file's ``openat`` take 0.47 ms in the kernel, against 0.09 ms in a new folder (strace -T,
+    medians, the same export of full60 at 1 Hz; perf: recently_deleted, find_get_block_common): about 0.3 s of CPU a
+    run, in every tree alike, that an export into a new folder does not pay. A bench started within minutes of
+    another one's end still meets the inodes that one freed."""
     import tempfile
     with tempfile.TemporaryDirectory(prefix="bench-export-") as tmp:
         tmp = Path(tmp)
@@ -235,10 +245,11 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
         loads = {n: [] for n in trees}
         samples = {}
         resident = []
-        for _ in range(repeats):
+        for k in range(repeats):
             for name, (tree, env) in trees.items():
                 resident.append(evict(recording) if cold else preload(recording))
-                dt, samples[name], c, load = run_export(tree, recording, tmp / f"out-{name}", rate, workers, env)
+                dt, samples[name], c, load = run_export(tree, recording, tmp / f"out-{name}-{k}", rate, workers,
+                                                        env)                # a new folder: see the docstring
                 times[name].append(dt)
                 cpu[name].append(c)
                 loads[name].append(load)
@@ -254,7 +265,8 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
                 # by 10-20 % within minutes); the median of those is the figure its drift moves least
                 "paired_ratio_median": {f"{n} / {rev}": paired_median(times[n], times[rev], samples[n], samples[rev])
                                         for n in ours for rev in revs},
-                "outputs": {f"{n} / {rev}": compare_outputs(tmp / f"out-{rev}", tmp / f"out-{n}")
+                "outputs": {f"{n} / {rev}": compare_outputs(tmp / f"out-{rev}-{repeats - 1}",
+                                                                          tmp / f"out-{n}-{repeats - 1}")
                             for n in ours for rev in revs}}
 
 
