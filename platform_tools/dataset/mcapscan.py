@@ -186,30 +186,6 @@ def _message_head(buf, pos: int, offset: int, cid: int, where: str) -> tuple[int
     return length, log_time
 
 
-class _Prefix:
-    """The first ``n`` bytes of a zstd chunk's records, decompressed only as far as they are asked for (:meth:`upto`)
-    into one buffer the messages are views of."""
-
-    def __init__(self, data, n: int, where: str):
-        import zstandard
-        self.buf = memoryview(bytearray(n))
-        self.size, self.got, self.where = n, 0, where
-        self._reader = zstandard.ZstdDecompressor().stream_reader(data)
-
-    def upto(self, n: int) -> None:
-        n = min(n, self.size)
-        try:
-            while self.got < n:
-                k = self._reader.readinto(self.buf[self.got:n])
-                if k == 0:
-                    raise ScanError(f"{self.where}: the records end at byte {self.got}, before their stated size")
-                self.got += k
-        except ScanError:
-            raise
-        except Exception as exc:                # zstandard.ZstdError: a damaged chunk
-            raise ScanError(f"{self.where}: {type(exc).__name__}: {exc}") from None
-
-
 def _prefix_messages(fh, chunk_index, wanted, heads, stats):
     """``(log_time, offset, channel, data)`` of the chunk's wanted messages, by offset, its zstd records decompressed
     only up to the last byte wanted: a channel in ``heads`` gives at most ``heads[channel]`` bytes of each message's
@@ -227,22 +203,25 @@ def _prefix_messages(fh, chunk_index, wanted, heads, stats):
         return None
     _, data, _ = _chunk_records(fh, chunk_index)
     where = f"chunk at offset {chunk_index.chunk_start_offset}"
-    prefix = _Prefix(data, need, where)
+    try:
+        buf = libzstd.decompress_prefix(data, need)
+    except libzstd.ZstdError as exc:            # a damaged chunk
+        raise ScanError(f"{where}: ZstdError: {exc}") from None
+    if len(buf) < need:
+        raise ScanError(f"{where}: the records end at byte {len(buf)}, before their stated size")
     out = []
     for offset, cid, _ in index:
         start = offset + MESSAGE_HEAD
-        prefix.upto(start)
         if start > need:
             raise ScanError(f"{where}: no Message record at byte {offset}, where its message index says")
-        length, log_time = _message_head(prefix.buf, offset, offset, cid, where)
+        length, log_time = _message_head(buf, offset, offset, cid, where)
         end = offset + RECORD_HEAD + length
         if cid in heads:
             end = min(end, start + heads[cid])
         if end > need:
             raise ScanError(f"{where}: the Message record at byte {offset} is not what its message index says")
-        prefix.upto(end)
-        out.append((log_time, offset, cid, prefix.buf[start:end]))
-    stats["decompressed_bytes"] = stats.get("decompressed_bytes", 0) + prefix.got
+        out.append((log_time, offset, cid, buf[start:end]))
+    stats["decompressed_bytes"] = stats.get("decompressed_bytes", 0) + need
     return out
 
 

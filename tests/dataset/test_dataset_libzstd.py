@@ -86,3 +86,51 @@ def test_damage_and_a_wrong_size_are_one_line(fallback, monkeypatch):
         assert "\n" not in str(exc.value) and str(exc.value)
     # a frame holding less than was asked for comes back short: the caller compares (mcapscan.read_chunk does)
     assert bytes(libzstd.decompress(bytes(frame), len(raw) + 10)) == raw
+
+
+@pytest.mark.parametrize("fallback", [False, True])
+def test_a_prefix_is_the_first_bytes_of_the_content_and_no_more(fallback, monkeypatch):
+    if fallback:
+        monkeypatch.setattr(libzstd, "_lib", False)
+    raw = _thermal_like(7, 600_000)
+    frame = zstandard.ZstdCompressor(level=3).compress(raw)
+    streamed = zstandard.ZstdCompressor(write_content_size=False).compressobj()
+    unsized = streamed.compress(raw) + streamed.flush()
+    two = zstandard.ZstdCompressor(level=1).compress(raw[:1000]) + frame      # two frames, one after the other
+    for data, content in ((frame, raw), (unsized, raw), (two, raw[:1000] + raw)):
+        for n in (1, 17, 1000, 1001, 131_072, 131_073, 400_000, len(content)):
+            assert bytes(libzstd.decompress_prefix(memoryview(b"x" + data)[1:], n)) == content[:n]
+        # the content ends first: what there is, the caller compares the length (mcapscan does)
+        assert bytes(libzstd.decompress_prefix(data, len(content) + 5)) == content
+    assert bytes(libzstd.decompress_prefix(frame, 0)) == b""
+
+
+def test_one_context_serves_one_prefix_after_another_even_after_a_damaged_one():
+    # the system library's context is kept per thread and reset before each use: a frame left half-read, or one
+    # that failed, leaves nothing behind for the next
+    a, b = _thermal_like(8), _thermal_like(9)
+    fa, fb = (zstandard.ZstdCompressor(level=3).compress(x) for x in (a, b))
+    assert bytes(libzstd.decompress_prefix(fa, 50_000)) == a[:50_000]
+    with pytest.raises(libzstd.ZstdError):
+        libzstd.decompress_prefix(b"not zstd at all" * 20, 100)
+    assert bytes(libzstd.decompress_prefix(fb, 200_000)) == b[:200_000]
+    assert bytes(libzstd.decompress_prefix(fa, len(a))) == a
+
+
+@pytest.mark.parametrize("fallback", [False, True])
+def test_a_damaged_prefix_is_one_line(fallback, monkeypatch):
+    if fallback:
+        monkeypatch.setattr(libzstd, "_lib", False)
+    raw = _thermal_like(3)
+    damaged = bytearray(zstandard.ZstdCompressor(level=1, write_checksum=True).compress(raw))
+    damaged[20:84] = bytes(64)                  # the first block's header and literals
+    with pytest.raises(libzstd.ZstdError) as bad:
+        libzstd.decompress_prefix(bytes(damaged), len(raw))
+    assert "\n" not in str(bad.value) and str(bad.value)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.binary(max_size=5000), st.integers(1, 9), st.integers(0, 6000))
+def test_any_prefix_is_what_python_zstandard_gives(raw, level, n):
+    frame = zstandard.ZstdCompressor(level=level).compress(raw)
+    assert bytes(libzstd.decompress_prefix(frame, n)) == raw[:n]
