@@ -10,9 +10,6 @@
   glibc's malloc otherwise hands every block of a few MB (a decompressed MCAP chunk, an image, a registration's
   accumulators) back to the kernel when it is freed and takes fresh pages for the next one, about 13,000 page
   faults and 20 ms of kernel time per full-size sample (docs/dataset.md "Speed").
-- That heap is served in 2 MB pages where the kernel offers them (:func:`huge_page_heap`): a worker's first chunk
-  faulted in about 21,000 pages of 4 KB, and the registration's scattered writes into a 13 MB accumulator missed
-  the TLB; with them an export of the 60 s full-size recording at 1 Hz takes 6-7 % less CPU.
 """
 from __future__ import annotations
 
@@ -34,19 +31,7 @@ M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
 MMAP_THRESHOLD_BYTES = 32 << 20
 #: free memory at the top of the heap kept up to this size instead of being returned to the kernel
 TRIM_THRESHOLD_BYTES = 1 << 30
-#: linux/mman.h: back this range with transparent huge pages (where /sys/kernel/mm/transparent_hugepage/enabled
-#: says "madvise" or "always")
-MADV_HUGEPAGE = 14
-#: a transparent huge page on x86-64 and arm64 with 4 KB pages (the kernel's HPAGE_PMD_SIZE)
-HUGE_PAGE_BYTES = 2 << 20
-#: the heap a worker grows at once and advises (:func:`huge_page_heap`): more than a full-size sample's blocks (a
-#: worker's heap grew by about 84 MB over its first chunk, 36 MB more while numba loaded its kernels), in blocks
-#: below MMAP_THRESHOLD_BYTES so that malloc takes them from the heap
-HEAP_RESERVE_BLOCKS = 4
-HEAP_RESERVE_BLOCK_BYTES = 30 << 20
 _kept: list[bool] = []
-#: the bytes :func:`huge_page_heap` advised in this process (one entry once it ran)
-_advised: list[int] = []
 
 
 def _set_pdeathsig(sig: int) -> bool:
@@ -94,48 +79,7 @@ def keep_freed_memory() -> bool:
         except (OSError, AttributeError):
             ok = False
     _kept.append(ok)
-    if ok:
-        huge_page_heap()
     return ok
-
-
-def huge_page_heap() -> int:
-    """Grow this process's heap by HEAP_RESERVE_BLOCKS blocks of HEAP_RESERVE_BLOCK_BYTES without writing into
-    them, ask the kernel to back the 2 MB-aligned part of what it grew with transparent huge pages
-    (``madvise(MADV_HUGEPAGE)``), and free the blocks: malloc keeps them at the top of its heap
-    (TRIM_THRESHOLD_BYTES, set first by :func:`keep_freed_memory`) and serves the next large buffers from them, each
-    2 MB touched then costing one page fault instead of 512. The pages are the kernel's zeroed ones either way, so
-    nothing computed changes; a 2 MB page is only taken where the process writes. Once per process; returns the bytes
-    advised, 0 where it was not done (not Linux, no sbrk heap to grow, madvise refused: the heap is left as it is)."""
-    if _advised:
-        return _advised[0]
-    advised = 0
-    if sys.platform.startswith("linux"):
-        try:
-            libc = ctypes.CDLL(None, use_errno=True)
-            libc.sbrk.restype = ctypes.c_void_p
-            libc.sbrk.argtypes = [ctypes.c_ssize_t]
-            libc.malloc.restype = ctypes.c_void_p
-            libc.malloc.argtypes = [ctypes.c_size_t]
-            libc.free.argtypes = [ctypes.c_void_p]
-            libc.madvise.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int]
-            start = libc.sbrk(0)
-            blocks = [libc.malloc(HEAP_RESERVE_BLOCK_BYTES) for _ in range(HEAP_RESERVE_BLOCKS)]
-            end = libc.sbrk(0)
-            lo = -(-start // HUGE_PAGE_BYTES) * HUGE_PAGE_BYTES
-            hi = end // HUGE_PAGE_BYTES * HUGE_PAGE_BYTES
-            # the blocks came from the heap, which grew (the first may begin in its free top; blocks malloc had to
-            # mmap, a heap that could not grow in place, would leave it as it was)
-            grown = all(blocks) and end - start >= (HEAP_RESERVE_BLOCKS - 1) * HEAP_RESERVE_BLOCK_BYTES
-            if grown and libc.madvise(lo, hi - lo, MADV_HUGEPAGE) == 0:
-                advised = hi - lo
-            for b in blocks:
-                if b:
-                    libc.free(b)
-        except (OSError, AttributeError, TypeError):
-            advised = 0
-    _advised.append(advised)
-    return advised
 
 
 def stop(processes) -> list[int]:

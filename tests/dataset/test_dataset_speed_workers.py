@@ -13,7 +13,6 @@ import os
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
 
@@ -325,43 +324,6 @@ def test_a_process_that_keeps_freed_memory_reuses_its_pages():
     assert kept == "True" and faults < pages // 100           # the freed pages serve the next sample's blocks
     _, faults, pages = run("default")
     assert faults > pages // 10                                 # what glibc's defaults do: fresh pages each time
-
-
-#: in a fresh interpreter: blocks of under 4 MB (numpy advises its own arrays from 4 MB up) such as a sample's
-#: decompressed chunks and images, written once; prints the bytes advised, the minor page faults the writes took
-#: and the 4 KB pages they cover
-_HUGE = (
-    "import resource, sys\n"
-    "import numpy as np\n"
-    "from platform_tools.dataset import workers\n"
-    "if sys.argv[1] == 'off':\n"
-    "    workers.huge_page_heap = lambda: 0\n"
-    "workers.keep_freed_memory()\n"
-    "a = resource.getrusage(resource.RUSAGE_SELF).ru_minflt\n"
-    "blocks = [np.ones(3_000_000 // 8) for _ in range(30)]\n"
-    "print(workers._advised[0] if workers._advised else 0, resource.getrusage(resource.RUSAGE_SELF).ru_minflt - a, "
-    "30 * 3_000_000 // 4096)\n")
-
-
-def _thp_mode() -> str:
-    try:
-        text = Path("/sys/kernel/mm/transparent_hugepage/enabled").read_text()
-    except OSError:
-        return "none"
-    return text[text.index("[") + 1:text.index("]")]
-
-
-@pytest.mark.skipif(_thp_mode() not in ("madvise", "always"), reason="the kernel offers no transparent huge pages")
-def test_a_workers_heap_is_served_in_huge_pages():
-    def run(mode: str) -> tuple[int, int, int]:
-        r = subprocess.run([sys.executable, "-c", _HUGE, mode], cwd=REPO, capture_output=True, text=True, timeout=120)
-        assert r.returncode == 0, r.stderr
-        return tuple(map(int, r.stdout.split()))
-    advised, faults, pages = run("on")
-    assert advised >= 100 << 20
-    assert faults < pages // 10                 # mostly 2 MB at a fault: the reserve malloc kept serves them
-    advised, faults, pages = run("off")
-    assert advised == 0 and faults > pages // 2     # 4 KB at a fault where the heap was not advised
 
 
 def test_the_export_command_refuses_an_unknown_start_method_in_one_line(sim, tmp_path):
