@@ -157,7 +157,9 @@ def decompress_prefix(data, n: int) -> bytes | memoryview:
     src = np.frombuffer(data, np.uint8)
     out = np.empty(n, np.uint8)
     ctx = _context(lib)
-    lib.ZSTD_DCtx_reset(ctx, ZSTD_RESET_SESSION_ONLY)
+    r = lib.ZSTD_DCtx_reset(ctx, ZSTD_RESET_SESSION_ONLY)
+    if lib.ZSTD_isError(r):
+        raise ZstdError(f"error resetting the zstd context: {lib.ZSTD_getErrorName(r).decode()}")
     inb = _InBuffer(src.ctypes.data if src.size else None, src.size, 0)
     outb = _OutBuffer(out.ctypes.data, n, 0)
     while outb.pos < n:
