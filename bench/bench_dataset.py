@@ -216,6 +216,21 @@ def paired_median(new_s: list, old_s: list, new_samples: int, old_samples: int) 
     return statistics.median((new_samples / a) / (old_samples / b) for a, b in zip(new_s, old_s))
 
 
+def check_room(folder: Path, warm_outputs: list, scale: float, repeats: int) -> int:
+    """The bytes the timed runs will write into ``folder``, estimated as each tree's warm-up output (``warm_outputs``)
+    times ``scale`` (the timed runs' rate over the warm-up's) times ``repeats``, checked against the free space there
+    (the outputs are kept until the bench ends, see :func:`bench_export`): a bench that would fill the disk stops
+    before its first timed run, naming the folder and both figures. Returns the estimate."""
+    import shutil
+    wrote = sum(f.stat().st_size for out in warm_outputs for f in Path(out).rglob("*") if f.is_file())
+    need = int(wrote * scale * repeats)
+    free = shutil.disk_usage(folder).free
+    if need > free:
+        raise SystemExit(f"{folder}: the timed runs would write about {need / 1e6:,.1f} MB (kept until the bench ends) "
+                         f"and {free / 1e6:,.1f} MB are free; fewer --repeats, a lower --rate, or more room")
+    return need
+
+
 def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, revs=(BASELINE,),
                  fork: bool = False, spawn: bool = False, cold: bool = False) -> dict:
     """``spawn`` / ``fork``: this tree a second time with its workers spawned ("new-spawn") / forked ("new-fork"),
@@ -240,6 +255,7 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
             trees["new-fork"] = (REPO, {FORK_ENV: "fork"})
         for name, (tree, env) in trees.items():          # warm-up: numba compiles into each tree's cache
             run_export(tree, recording, tmp / f"warm-{name}", WARM_UP_RATE_HZ, workers, env)
+        check_room(tmp, [tmp / f"warm-{n}" for n in trees], rate / WARM_UP_RATE_HZ, repeats)
         times = {n: [] for n in trees}
         cpu = {n: [] for n in trees}
         loads = {n: [] for n in trees}

@@ -80,3 +80,23 @@ def test_a_run_never_writes_into_nor_deletes_a_folder_that_exists(tmp_path):
     with pytest.raises(SystemExit, match="exists"):
         _bench().run_export(tmp_path / "tree", tmp_path / "rec", out, 1.0, 2)
     assert (out / "kept.txt").read_text() == "a previous run's file"
+
+
+def test_a_bench_that_would_fill_the_disk_stops_before_its_timed_runs(tmp_path, monkeypatch):
+    """The timed runs' outputs are kept until the bench ends: their size, scaled from the warm-up outputs, is checked
+    against the free space first."""
+    import collections
+    import shutil
+    import pytest
+    for name in ("warm-b7c0534", "warm-new"):
+        (tmp_path / name / "rec").mkdir(parents=True)
+        (tmp_path / name / "rec" / "a.png").write_bytes(bytes(1000))
+    Usage = collections.namedtuple("Usage", "total used free")
+    b = _bench()
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: Usage(10 ** 9, 0, 50_000))
+    # 2 trees x 1000 bytes, x4 for 1 Hz against the warm-up's 0.25 Hz, x5 repeats: 40,000 bytes
+    assert b.check_room(tmp_path, [tmp_path / "warm-b7c0534", tmp_path / "warm-new"], 4.0, 5) == 40_000
+    said = f"{tmp_path}: the timed runs would write about 0.4 MB .* 0.1 MB are free"
+    with pytest.raises(SystemExit, match=said) as exc:
+        b.check_room(tmp_path, [tmp_path / "warm-b7c0534", tmp_path / "warm-new"], 40.0, 5)    # 400,000 > 50,000
+    assert "--repeats" in str(exc.value)
