@@ -9,10 +9,13 @@ and ``finished(task, result)`` in this process as each one ends, in any order. `
 from __future__ import annotations
 
 import contextlib
+import queue
 import sys
 from concurrent.futures.process import BrokenProcessPool
 
 from platform_tools.rig.progress import progress
+from .interrupts import held
+from .workers import forking_workers
 
 
 class EngineError(Exception):
@@ -110,10 +113,20 @@ class Pool:
             if forked and preload is not None:
                 with stdlib_distutils():
                     _warm(preload)          # here: the forked workers inherit what it loaded
-            self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_start_worker,
-                                             initargs=(os.getpid(), None if forked else warm_up, warm_count))
-            for _ in range(workers):    # all started now (a forking executor starts them all at the first)
-                self._pool.submit(_nothing)
+            # held while they start: an interrupt then stops the workers started so far (below), and a worker
+            # forked now inherits a handler that only records until it takes its own, at the fork
+            # (workers.forking_workers): with the export's, a worker stopped at once printed a traceback
+            with held() as deliver:
+                self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_start_worker,
+                                                 initargs=(os.getpid(), None if forked else warm_up, warm_count))
+                try:
+                    with forking_workers():
+                        for _ in range(workers):    # all started now (a forking executor starts them at the first)
+                            self._pool.submit(_nothing)
+                    deliver()
+                except BaseException:           # an interrupt while they start: none is left behind
+                    self.close(abort=True)
+                    raise
 
     def _warm_workers(self) -> None:
         """Queue each forked worker's warm-up (once): one call per worker, each of which waits for the others
@@ -126,60 +139,80 @@ class Pool:
 
     def run(self, work, tasks, finished) -> None:
         """``work(task)`` for every task, ``finished(task, result)`` here as each ends. On any error or interrupt
-        (SIGINT) here, the queued tasks are cancelled and every worker is stopped at once (a task in flight is
-        abandoned, its chunk redone on resume) before the exception goes on."""
-        from concurrent.futures import FIRST_COMPLETED, wait
+        (SIGINT, or SIGTERM where the command turns it into one), the queued tasks are cancelled and every worker
+        is stopped at once (a task in flight is abandoned, its chunk redone on resume) before the exception goes
+        on. An interrupt acts between two tasks' ends, never inside concurrent.futures (:mod:`.interrupts`)."""
         bar = iter(_bar(len(tasks)))
-        try:
-            self._warm_workers()                # no map came first (an index read here)
-            pending = {self._pool.submit(work, t): t for t in tasks}
-            while pending:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for f in done:
-                    t = pending.pop(f)
-                    finished(t, f.result())
+        ends = queue.SimpleQueue()          # the futures as they end (their done-callbacks), and wake-ups
+        with held(wake=lambda: ends.put(None)) as deliver:
+            try:
+                self._warm_workers()                # no map came first (an index read here)
+                pending = {}
+                for t in tasks:
+                    f = self._pool.submit(work, t)
+                    pending[f] = t
+                    f.add_done_callback(ends.put)
+                while pending:
+                    deliver()
+                    f = ends.get()
+                    if f is None or f not in pending:       # a signal's wake-up
+                        continue
+                    finished(pending.pop(f), f.result())
                     next(bar, None)
-        except BrokenProcessPool as exc:
-            self.close(abort=True)
-            raise _died(exc) from None
-        except BaseException:
-            self.close(abort=True)
-            raise
+                deliver()
+            except BrokenProcessPool as exc:
+                self.close(abort=True)
+                raise _died(exc) from None
+            except BaseException:
+                self.close(abort=True)
+                raise
 
     def map(self, fn, args: list[tuple], done=None) -> list:
         """``fn(*a)`` for each ``a`` of ``args`` in the workers, the results in that order (the index's chunk scans,
         :mod:`.indexscan`); ``done(k)`` is called here as the k-th ends (a progress bar). An error of ``fn`` cancels
         what is queued and goes on here; an interrupt stops every worker (as :meth:`run`)."""
-        from concurrent.futures import FIRST_COMPLETED, wait
+        ends = queue.SimpleQueue()
         futures = []
-        try:
-            futures = [self._pool.submit(fn, *a) for a in args]
-            self._warm_workers()                # each worker, once its last call is done
-            place = {f: k for k, f in enumerate(futures)}
-            pending = set(futures)
-            while pending:
-                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for f in finished:
+        with held(wake=lambda: ends.put(None)) as deliver:
+            try:
+                for a in args:
+                    f = self._pool.submit(fn, *a)
+                    futures.append(f)
+                    f.add_done_callback(ends.put)
+                self._warm_workers()                # each worker, once its last call is done
+                place = {f: k for k, f in enumerate(futures)}
+                left = len(futures)
+                while left:
+                    deliver()
+                    f = ends.get()
+                    if f is None or f not in place:
+                        continue
+                    left -= 1
                     f.result()                  # an error ends the map now
                     if done is not None:
                         done(place[f])
-            return [f.result() for f in futures]
-        except BrokenProcessPool as exc:
-            self.close(abort=True)
-            raise _died(exc) from None
-        except Exception:
-            for f in futures:
-                f.cancel()
-            raise
-        except BaseException:
-            self.close(abort=True)
-            raise
+                deliver()
+                return [f.result() for f in futures]
+            except BrokenProcessPool as exc:
+                self.close(abort=True)
+                raise _died(exc) from None
+            except Exception:
+                for f in futures:
+                    f.cancel()
+                raise
+            except BaseException:
+                self.close(abort=True)
+                raise
 
     def close(self, abort: bool = False) -> None:
         """Let the workers finish and end (``abort``: cancel what is queued and stop them now); once."""
         if self._closed:
             return
         self._closed = True
+        with held():                    # a second Ctrl-C while they stop acts once they have stopped
+            self._close(abort)
+
+    def _close(self, abort: bool) -> None:
         if not abort:
             self._pool.shutdown(wait=True)
             return
@@ -194,7 +227,7 @@ class Pool:
         manager = getattr(self._pool, "_executor_manager_thread", None)
         self._pool.shutdown(wait=False, cancel_futures=True)
         stop(mine)
-        if manager is not None:
+        if manager is not None and manager.ident is not None:     # None: interrupted before it started
             manager.join(MANAGER_JOIN_S)
 
 

@@ -28,15 +28,12 @@ plans the chunks, keeps the manifest and the resume markers, and writes the inde
 """
 from __future__ import annotations
 
-import contextlib
 import csv
 import hashlib
 import io
 import json
 import logging
 import re
-import signal
-import threading
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
@@ -47,6 +44,7 @@ from .calib import CalibrationError, at_recorded_size, for_recording, load_calib
 from .chunk import FILE_COLUMNS, KINDS, TMP_SUFFIX, preload, process_chunk, warm_up
 from .decode import IMAGE_STREAMS, probe_sizes
 from .engines import ENGINES, EngineError, start_method, started, stdlib_distutils
+from .interrupts import held
 from .pairing import plan
 from .recording import RecordingError, open_recording, read_summaries, telemetry_rows
 from .stereo import BUILT_IN, StereoError, load_plugin
@@ -190,27 +188,6 @@ def remove_partial(out: Path, recordings) -> list[Path]:
     return gone
 
 
-@contextlib.contextmanager
-def _interrupts_deferred():
-    """SIGINT / SIGTERM held back until the block ends, then raised again with the handlers restored: what the block
-    writes (a chunk marker, the manifest, the index) is written whole. Python runs signal handlers in the main
-    thread only, so this holds them there whichever thread the kernel delivered the signal to."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    got: list[int] = []
-    old = {}
-    try:
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            old[sig] = signal.signal(sig, lambda signum, frame: got.append(signum))
-        yield
-    finally:
-        for sig, handler in old.items():
-            signal.signal(sig, handler)
-        if got:
-            signal.raise_signal(got[0])
-
-
 def check_out(out: Path, manifest: dict) -> dict | None:
     """The existing manifest to resume, None for a new export; refuses a folder holding anything else."""
     if not out.exists():
@@ -335,14 +312,14 @@ def _export(recordings, out, rig, params, *, calibration, engine, workers, sched
               else {"per_recording": {r.name: c.to_dict() for r, c in zip(recs, cals)}})
     manifest |= {"status": "running", "calibration_models": models,
                  "chunks": len(tasks), "samples": sum(len(t["pairs"]) for t in tasks)}
-    with _interrupts_deferred():
+    with held():
         atomic.write_text(out / MANIFEST, json.dumps(manifest, indent=2) + "\n")
     resumed = old is not None and len(todo) < len(tasks)
     if resumed:
         log.warning("%s: resuming: %d of %d chunks already done", out, len(tasks) - len(todo), len(tasks))
 
     def finished(task: dict, rows: list[dict]) -> None:
-        with _interrupts_deferred():
+        with held():
             atomic.write_text(out / CHUNKS / f"{task['id']}.json", json.dumps(rows) + "\n")
         if on_chunk:
             on_chunk(task["id"])
@@ -361,7 +338,7 @@ def _export(recordings, out, rig, params, *, calibration, engine, workers, sched
     for t in tasks:
         rows += json.loads((out / CHUNKS / f"{t['id']}.json").read_text())
     text = card.render(manifest, rows, command)
-    with _interrupts_deferred():
+    with held():
         write_index(out, rows)
         atomic.write_text(out / card.CARD, text)
         manifest |= {"status": "complete", "rows": len(rows)}

@@ -13,6 +13,7 @@
 """
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import os
 import signal
@@ -55,12 +56,44 @@ def die_with_parent(parent_pid: int) -> None:
     """The pool's initializer, run in each worker: end when ``parent_pid`` ends; leave SIGINT to the parent; die of
     SIGTERM (:func:`stop`) at once, whatever handler a forked worker inherited (the export command turns SIGTERM into
     an interrupt in its own process, which in a worker would only fail the task in hand)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    worker_signals()
     if not _set_pdeathsig(signal.SIGKILL):
         threading.Thread(target=_watch_parent, args=(parent_pid,), daemon=True, name="parent-watch").start()
     if os.getppid() != parent_pid:        # the parent died before the request took effect
         os._exit(1)
+
+
+def worker_signals() -> None:
+    """A worker's handlers: SIGINT ignored (the parent acts on Ctrl-C), SIGTERM at its default (ends it at once)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+#: set while :func:`forking_workers` runs: a process forked then is a worker
+_forking: list[bool] = []
+#: the at-fork hook registered (once per process: a hook cannot be removed)
+_hook: list[bool] = []
+
+
+def _after_fork_in_child() -> None:
+    if _forking:
+        worker_signals()
+
+
+@contextlib.contextmanager
+def forking_workers():
+    """Processes forked in this block (a forking process pool's workers, started by its first submit) take
+    :func:`worker_signals` at the fork (``os.register_at_fork``), not later in the pool's initializer: until then a
+    worker has this process's handlers, and a SIGTERM from :func:`stop` in that gap ran the export's (a traceback
+    in the worker instead of its end). Main thread only; nothing where there is no fork (Windows)."""
+    if not _hook and hasattr(os, "register_at_fork"):
+        os.register_at_fork(after_in_child=_after_fork_in_child)
+        _hook.append(True)
+    _forking.append(True)
+    try:
+        yield
+    finally:
+        _forking.clear()
 
 
 def keep_freed_memory() -> bool:
