@@ -13,8 +13,8 @@ import queue
 import sys
 from concurrent.futures.process import BrokenProcessPool
 
+from platform_tools.rig.interrupts import held
 from platform_tools.rig.progress import progress
-from .interrupts import held
 from .workers import forking_workers
 
 
@@ -141,7 +141,7 @@ class Pool:
         """``work(task)`` for every task, ``finished(task, result)`` here as each ends. On any error or interrupt
         (SIGINT, or SIGTERM where the command turns it into one), the queued tasks are cancelled and every worker
         is stopped at once (a task in flight is abandoned, its chunk redone on resume) before the exception goes
-        on. An interrupt acts between two tasks' ends, never inside concurrent.futures (:mod:`.interrupts`)."""
+        on. An interrupt acts between two tasks' ends, never inside concurrent.futures (:mod:`platform_tools.rig.interrupts`)."""
         bar = iter(_bar(len(tasks)))
         ends = queue.SimpleQueue()          # the futures as they end (their done-callbacks), and wake-ups
         with held(wake=lambda: ends.put(None)) as deliver:

@@ -39,12 +39,12 @@ from pathlib import Path
 from typing import Callable
 
 from platform_tools.rig import atomic
+from platform_tools.rig.interrupts import held
 from . import card, thermal8
 from .calib import CalibrationError, at_recorded_size, for_recording, load_calibration, model_to_dict, zed_right
 from .chunk import FILE_COLUMNS, KINDS, TMP_SUFFIX, preload, process_chunk, warm_up
 from .decode import IMAGE_STREAMS, probe_sizes
 from .engines import ENGINES, EngineError, start_method, started, stdlib_distutils
-from .interrupts import held
 from .pairing import plan
 from .recording import RecordingError, open_recording, read_summaries, telemetry_rows
 from .stereo import BUILT_IN, StereoError, load_plugin

@@ -1,19 +1,25 @@
-"""Where SIGINT and SIGTERM act in the export's process: held while a block runs, then run where the block chooses.
+"""Where SIGINT and SIGTERM act: held while a block runs, then run where the block chooses.
 
 Python runs a signal's handler in the main thread at the next instruction after the signal lands, wherever that
-is. The export's handlers raise (Ctrl-C's KeyboardInterrupt; the export command turns SIGTERM into one too), and
-a raise in the middle of code that takes several locks in turn leaves some of them taken. concurrent.futures.wait
-takes the lock of every pending future, one after another: a SIGTERM that landed there left a future's lock taken
-by the main thread; the executor's manager thread then waited for it forever, and the process with it at exit
-(an export that SIGTERM never ended, seen once in CI; tests/dataset/test_dataset_interrupts.py makes it happen on
-purpose). So the pool (:mod:`.engines`) holds both signals while it waits and runs them between two tasks, and the
-export holds them while it writes a marker, the manifest or the index, so that each is written whole.
+is; Ctrl-C's handler raises KeyboardInterrupt, and so does the export command's for SIGTERM. Two places here must
+not be interrupted just anywhere:
+- the export's process pool (platform_tools.dataset.engines). A raise in the middle of code that takes several
+  locks in turn leaves some of them taken: concurrent.futures.wait takes the lock of every pending future, one
+  after another, and a SIGTERM that landed there left one taken by the main thread; the executor's manager
+  thread then waited for it forever, and the process with it at exit (an export that SIGTERM never ended, seen
+  in CI; tests/dataset/interrupt_probe.py makes it happen on purpose). The pool holds both signals while it
+  waits and runs them between two tasks; the export holds them while it writes a marker, the manifest or the
+  index, so that each is written whole;
+- boson-config's transaction (platform_tools.boson.transaction): a camera must not be left half-configured, so
+  a signal ends the step in progress and then every camera is put back, as after a failure; the signal's
+  default action (SIGTERM's: end the process at once) is not taken.
 
 :func:`held` is the one tool: while its block runs, each of the two signals only records its number (and calls
-``wake``, so that a wait can end at once); the block runs what came with the function it is given
-(:class:`Held`), and whatever is still held when the block ends is raised again then, with the handlers restored.
-The handlers run are the ones in place when the block started: a signal that was ignored stays ignored, one left
-at its default still ends the process.
+``wake``, so that a wait can end at once, or a line can say what happens next); the block runs what came with
+the function it is given (:class:`Held`), or reads and clears ``came`` to act on it itself, and whatever is still
+held when the block ends is raised again then, with the handlers restored. The handlers run are the ones in place
+when the block started: a signal at its default still ends the process when delivered, and an ignored one (a
+background job's SIGINT) is left ignored: it is not even recorded.
 """
 from __future__ import annotations
 
@@ -42,6 +48,8 @@ class Held:
 
     def _install(self) -> None:
         for sig in HELD_SIGNALS:
+            if sig not in self._outer and signal.getsignal(sig) is signal.SIG_IGN:
+                continue                    # ignored before the block: left ignored
             outer = signal.signal(sig, self._record)
             self._outer.setdefault(sig, outer)
         self._active = True
@@ -63,7 +71,7 @@ class Held:
         self._restore()
         try:
             # raise_signal runs the handler before it returns, in this thread (the main one): KeyboardInterrupt
-            # raised here; an ignored signal does nothing; a default SIGTERM ends the process, as it would have
+            # raised here; a default SIGTERM ends the process, as it would have
             signal.raise_signal(sig)
         finally:
             self._install()
