@@ -19,7 +19,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "back and verify; revert a camera to what was read if any step fails. "
                                    "Defaults come from the rig description's sync section.",
                        epilog=options.EXITS.format(ok="ended configured or unchanged (all or nothing: when one "
-                                                          "fails, every camera is put back)"))
+                                                          "fails, every camera is put back)") +
+                       " 130 stopped by Ctrl-C or SIGTERM: the step in progress ends on every camera, then every "
+                       "camera is put back (one that comes during the last step lets it end, with a warning).")
     mode = p.add_mutually_exclusive_group()
     helps = {"slave": "external-sync slave: one frame per trigger pulse from the capture card",
              "disabled": "external sync disabled (free running)"}

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable
 
+from platform_tools.rig.conventions import EXIT_INTERRUPTED
 from . import discovery, identity, syncsetup, transaction
 from . import operations as ops
 from .client import Timeouts
@@ -40,10 +41,11 @@ def select(camera: str, port: str | None, rig, pool: ops.ClientPool,
     return targets, warnings
 
 
-def configure_targets(targets: list[discovery.Target], pool: ops.ClientPool,
-                      plan: syncsetup.Plan) -> list[syncsetup.CameraResult]:
+def configure_targets(targets: list[discovery.Target], pool: ops.ClientPool, plan: syncsetup.Plan,
+                      on_signal: Callable[[str], None] | None = None) -> list[syncsetup.CameraResult]:
     """Every camera's client (open since identity), then the plan as one transaction; a camera that
-    cannot be opened leaves the others untouched (``aborted``)."""
+    cannot be opened leaves the others untouched (``aborted``). ``on_signal``: transaction.configure_rig's;
+    transaction.Interrupted when a signal stopped it."""
     results = [syncsetup.CameraResult(t.label, t.port, t.serial) for t in targets]
 
     def open_one(i: int):
@@ -61,7 +63,7 @@ def configure_targets(targets: list[discovery.Target], pool: ops.ClientPool,
                 r.status, r.error = "aborted", f"not configured: {bad} could not be opened (all or nothing)"
         return results
     members = [transaction.Member(c, t.serial, r) for c, t, r in zip(clients, targets, results)]
-    return transaction.configure_rig(members, plan)
+    return transaction.configure_rig(members, plan, on_signal)
 
 
 @dataclass
@@ -69,6 +71,7 @@ class Outcome:
     """What a ``boson-config`` run ended with."""
     doc: dict                                  # syncsetup.summary: what --json prints
     results: list[syncsetup.CameraResult]
+    interrupted: str | None = None             # the signal that stopped the transaction (every camera put back)
 
     @property
     def late_warnings(self) -> list[str]:
@@ -82,8 +85,10 @@ class Outcome:
 
     @property
     def exit_code(self) -> int:
-        """2 when a port could not be opened (does not exist, denied, in use), 1 when a camera failed,
-        else 0."""
+        """130 when a signal stopped the set-up (every camera put back), 2 when a port could not be opened
+        (does not exist, denied, in use), 1 when a camera failed, else 0."""
+        if self.interrupted:
+            return EXIT_INTERRUPTED
         if any(r.port_problem for r in self.results):
             return 2
         return 0 if self.doc["ok"] else 1
@@ -97,11 +102,17 @@ def configure(rig, plan: syncsetup.Plan, *, camera: str = "all", port: str | Non
     from identity to the end. Warnings go to ``warn`` as they arise, before the work they are about."""
     warnings = syncsetup.plan_warnings(plan, rig)
     _each(warn, warnings)
+    interrupted = None
     with ops.ClientPool(timeouts, retries) as pool:
         targets, notes = select(camera, port, rig, pool, dev_dir)
         _each(warn, notes)
-        results = configure_targets(targets, pool, plan)
-    return Outcome(syncsetup.summary(plan, results, warnings), results)
+        try:
+            results = configure_targets(targets, pool, plan, lambda name: warn(
+                f"{name}: stopping after the step in progress, then putting every camera back"))
+        except transaction.Interrupted as exc:
+            results, interrupted = exc.results, exc.signal_name
+    doc = syncsetup.summary(plan, results, warnings) | {"interrupted": interrupted}
+    return Outcome(doc, results, interrupted)
 
 
 def _each(warn: Warn, lines: Iterable[str]) -> None:
@@ -114,6 +125,8 @@ def report_lines(doc: dict) -> list[str]:
     camera's status, changes, frame rate, warnings, and what it holds now when it was reverted or failed."""
     out = [f"external sync -> {doc['mode']}" + (" (dry run)" if doc["dry_run"] else "") +
            (", persisted to flash" if doc["persist"] and not doc["dry_run"] else "")]
+    if doc.get("interrupted"):
+        out.append(f"stopped by {doc['interrupted']}: every camera was put back")
     for cam in doc["cameras"]:
         sn = f"SN {cam['serial']}" if cam["serial"] is not None else "SN ?"
         who = cam["label"] if cam["label"] == sn else f"{cam['label']:<6} {sn}"

@@ -18,6 +18,12 @@ verified by reading back. A camera not touched yet is ``aborted``. Every camera'
 back into ``after``; ``flash`` is what its flash holds as far as the run knows, and a warning says when
 RAM and flash differ (the camera comes back otherwise after a power cycle).
 
+Ctrl-C and SIGTERM (``docker stop``) are held for the whole transaction (platform_tools.rig.interrupts): the
+step in progress ends on every camera (a command is never cut in half), then, if a step is left, every
+camera is put back as after a failure and :class:`Interrupted` says so; one that comes during the last
+step lets it end (one camera's flash new and the other's old is what the transaction exists to prevent),
+and a warning says it came too late to stop anything. A second Ctrl-C does not cut the revert short.
+
 Two cameras cannot be written atomically: a power cut during phase 4 can leave one camera's flash new
 and the other's old. The next run with ``read_flash`` sees it (the RAM/flash warning) and rewrites only
 the camera that needs it; docs/boson.md says so.
@@ -25,9 +31,11 @@ the camera that needs it; docs/boson.md says so.
 from __future__ import annotations
 
 import logging
+import signal
 from dataclasses import dataclass
 from typing import Any, Callable
 
+from platform_tools.rig.interrupts import held
 from . import commands as C
 from .client import BosonClient
 from .codes import BosonError, IdentityMismatch
@@ -234,8 +242,29 @@ def _fail(members: list[Member], failed: list[tuple[Member, BosonError]], phase:
     for m, exc in failed:
         if phase == "read" and not m.touched:
             m.result.status = "error"
+    _put_back(members, plan)
+
+
+def _put_back(members: list[Member], plan: Plan) -> None:
     per_camera([m for m in members if m.result.status != "error"], _revert)
     per_camera([m for m in members if m.result.status != "error"], lambda m: _final_read(m, plan))
+
+
+def _stop(members: list[Member], name: str, phase: str, plan: Plan) -> None:
+    """An interrupt after ``phase`` ended on every camera: every camera put back, as after a failure."""
+    for m in members:
+        m.result.error = f"not configured: {name} came during the {phase} step; every camera was put back"
+    _put_back(members, plan)
+
+
+class Interrupted(Exception):
+    """The transaction stopped by ``signal_name`` (SIGINT, SIGTERM) before its last step: every camera was put
+    back (``results``, as :func:`configure_rig` returns them)."""
+
+    def __init__(self, signal_name: str, results: list[CameraResult]):
+        super().__init__(f"{signal_name}: stopped; every camera was put back")
+        self.signal_name = signal_name
+        self.results = results
 
 
 def link_stats(client: BosonClient) -> dict[str, int]:
@@ -244,41 +273,67 @@ def link_stats(client: BosonClient) -> dict[str, int]:
     return {"requests": client.requests, "timeouts": st.timeouts, "retries": st.retries, "reopens": st.reopens}
 
 
-def configure_rig(members: list[Member], plan: Plan) -> list[CameraResult]:
+def configure_rig(members: list[Member], plan: Plan,
+                  on_signal: Callable[[str], None] | None = None) -> list[CameraResult]:
     """Run ``plan`` on every camera as one transaction (see the module's doc); returns the results in
     the order of ``members``, each with its ``link`` statistics. Never raises for a camera problem: it is
-    in the results."""
-    try:
-        _transaction(members, plan)
-    finally:
-        for m in members:
-            m.result.link = link_stats(m.client)
-    return [m.result for m in members]
+    in the results. SIGINT / SIGTERM are held meanwhile (main thread only: where Python runs handlers);
+    ``on_signal(name)`` is told at once when the first comes; :class:`Interrupted` when it stopped the
+    transaction."""
+    came: list[str] = []
+
+    def wake(signum: int) -> None:
+        if not came:
+            came.append(signal.Signals(signum).name)
+            if on_signal is not None:
+                on_signal(came[0])
+    with held(wake=wake) as signals:
+        try:
+            stopped = _transaction(members, plan, lambda: came[0] if came else None)
+        finally:
+            for m in members:
+                m.result.link = link_stats(m.client)
+            signals.came.clear()            # acted on here: not raised again as the block ends
+    results = [m.result for m in members]
+    if stopped:
+        raise Interrupted(came[0], results)
+    if came:
+        for r in results:
+            r.warnings.append(f"{came[0]} came during the last step, which ended on every camera: the set-up "
+                              f"is complete")
+    return results
 
 
-def _transaction(members: list[Member], plan: Plan) -> None:
+def _transaction(members: list[Member], plan: Plan, interrupted: Callable[[], str | None]) -> bool:
+    """The phases (the module's doc); True when an interrupt stopped them (and every camera was put back)."""
     for m in members:
         m.result.status = "pending"
     failed = _phase(members, lambda m: _read(m, plan))
     if failed:
         _fail(members, failed, "read", plan)
-        return
+        return False
     if plan.dry_run:
         for m in members:
             m.result.status = "would-change" if m.result.changes or plan.persist else "unchanged"
             m.result.after = dict(m.result.before)
-        return
+        return False
     steps: list[tuple[str, Callable[[Member], None]]] = [
         ("apply", lambda m: _set_ram(m, plan.desired, "read-back after applying"))]
     if plan.check_trigger is not None:
         steps.append(("trigger check", lambda m: _check_trigger(m, plan)))
     if plan.persist:
         steps.append(("persist", lambda m: _persist(m, plan)))
+    done = "read"
     for name, step in steps:
+        if interrupted():
+            _stop(members, interrupted(), done, plan)
+            return True
         failed = _phase(members, step)
         if failed:
             _fail(members, failed, name, plan)
-            return
+            return False
+        done = name
     for m in members:
         m.result.status = "configured" if m.touched or m.result.persisted else "unchanged"
     per_camera(members, lambda m: _final_read(m, plan))
+    return False

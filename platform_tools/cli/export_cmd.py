@@ -5,8 +5,8 @@ import argparse
 import signal
 from pathlib import Path
 
-from platform_tools.rig.conventions import (UserError, add_output_options, add_rig_options, error, print_json,
-    rig_from_args)
+from platform_tools.rig.conventions import (EXIT_INTERRUPTED, UserError, add_output_options, add_rig_options, error,
+                                            print_json, rig_from_args)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -87,9 +87,6 @@ def _zed_images() -> tuple[str, ...]:
     from platform_tools.rig.schema import Processing
     return typing.get_args(typing.get_type_hints(Processing)["zed_images"])
 
-
-#: the shell's code for a command ended by SIGINT
-EXIT_INTERRUPTED = 130
 
 
 #: (option, attribute, default) of the options that go into the dataset card's command line when not default

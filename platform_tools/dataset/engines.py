@@ -144,7 +144,7 @@ class Pool:
         on. An interrupt acts between two tasks' ends, never inside concurrent.futures (:mod:`platform_tools.rig.interrupts`)."""
         bar = iter(_bar(len(tasks)))
         ends = queue.SimpleQueue()          # the futures as they end (their done-callbacks), and wake-ups
-        with held(wake=lambda: ends.put(None)) as deliver:
+        with held(wake=lambda signum: ends.put(None)) as deliver:
             try:
                 self._warm_workers()                # no map came first (an index read here)
                 pending = {}
@@ -173,7 +173,7 @@ class Pool:
         what is queued and goes on here; an interrupt stops every worker (as :meth:`run`)."""
         ends = queue.SimpleQueue()
         futures = []
-        with held(wake=lambda: ends.put(None)) as deliver:
+        with held(wake=lambda signum: ends.put(None)) as deliver:
             try:
                 for a in args:
                     f = self._pool.submit(fn, *a)

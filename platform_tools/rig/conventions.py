@@ -21,6 +21,8 @@ from platform_tools.rig import DEFAULT_RIG, Rig, load_rig
 EXIT_OK = 0
 EXIT_CHECK_FAILED = 1
 EXIT_BAD_INPUT = 2
+#: a command stopped by Ctrl-C or SIGTERM: 128 + SIGINT, as a shell reports a Ctrl-C
+EXIT_INTERRUPTED = 130
 
 log = logging.getLogger("platform_tools")
 
@@ -95,7 +97,7 @@ def run(handler: Callable[[argparse.Namespace], int | None], args: argparse.Name
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         error("interrupted")
-        return 130
+        return EXIT_INTERRUPTED
     except BrokenPipeError:
         return EXIT_OK
 

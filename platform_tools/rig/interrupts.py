@@ -35,7 +35,7 @@ class Held:
     """The signals that came while a :func:`held` block ran (their numbers, first first) and the handlers they
     have outside it. Calling it runs the first one's handler now: :meth:`__call__`."""
 
-    def __init__(self, wake: Callable[[], None] | None):
+    def __init__(self, wake: Callable[[int], None] | None):
         self.came: list[int] = []           #: signal numbers, in the order they came
         self._wake = wake
         self._outer: dict[int, object] = {}     #: signal number -> its handler outside the block
@@ -44,7 +44,7 @@ class Held:
     def _record(self, signum: int, frame) -> None:
         self.came.append(signum)
         if self._wake is not None:
-            self._wake()
+            self._wake(signum)
 
     def _install(self) -> None:
         for sig in HELD_SIGNALS:
@@ -79,13 +79,14 @@ class Held:
 
 class held:
     """``with held(wake) as deliver:`` SIGINT and SIGTERM recorded instead of run while the block runs (in the main
-    thread, the only one where Python runs handlers; elsewhere the block changes nothing). ``wake()`` is called
-    in the handler as each comes: it must be safe there (``queue.SimpleQueue.put``, documented as reentrant, is).
+    thread, the only one where Python runs handlers; elsewhere the block changes nothing). ``wake(signum)`` is
+    called in the handler as each comes: it must be safe there (``queue.SimpleQueue.put``, documented as
+    reentrant, is; so is printing a line).
     ``deliver()`` runs the first held one's handler where the block calls it (:meth:`Held.__call__`); on leaving
     the block the handlers are restored and the first signal still held is raised again, so its handler runs then.
     Blocks nest: an inner block's leftover signal goes to the outer block's record."""
 
-    def __init__(self, wake: Callable[[], None] | None = None):
+    def __init__(self, wake: Callable[[int], None] | None = None):
         self._held = Held(wake)
 
     def __enter__(self) -> Held:

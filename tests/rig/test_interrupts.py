@@ -39,9 +39,9 @@ def outer():
 def test_a_held_signal_runs_where_the_block_delivers_it(outer):
     wakes = queue.SimpleQueue()
     with pytest.raises(Came):
-        with held(wake=lambda: wakes.put(1)) as deliver:
+        with held(wake=wakes.put) as deliver:
             signal.raise_signal(signal.SIGTERM)
-            assert outer == [] and wakes.get_nowait() == 1      # recorded and woke, its handler not run
+            assert outer == [] and wakes.get_nowait() == signal.SIGTERM      # recorded and woke, its handler not run
             with pytest.raises(Came):
                 deliver()
             assert outer == [signal.SIGTERM]
