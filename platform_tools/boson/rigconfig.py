@@ -44,8 +44,8 @@ def select(camera: str, port: str | None, rig, pool: ops.ClientPool,
 def configure_targets(targets: list[discovery.Target], pool: ops.ClientPool, plan: syncsetup.Plan,
                       on_signal: Callable[[str], None] | None = None) -> list[syncsetup.CameraResult]:
     """Every camera's client (open since identity), then the plan as one transaction; a camera that
-    cannot be opened leaves the others untouched (``aborted``). ``on_signal``: transaction.configure_rig's;
-    transaction.Interrupted when a signal stopped it."""
+    cannot be opened leaves the others untouched (``aborted``). ``on_signal(line)``: what happens after a
+    Ctrl-C / SIGTERM, said at once (transaction.configure_rig); transaction.Interrupted when one stopped it."""
     results = [syncsetup.CameraResult(t.label, t.port, t.serial) for t in targets]
 
     def open_one(i: int):
@@ -107,8 +107,7 @@ def configure(rig, plan: syncsetup.Plan, *, camera: str = "all", port: str | Non
         targets, notes = select(camera, port, rig, pool, dev_dir)
         _each(warn, notes)
         try:
-            results = configure_targets(targets, pool, plan, lambda name: warn(
-                f"{name}: stopping after the step in progress, then putting every camera back"))
+            results = configure_targets(targets, pool, plan, warn)
         except transaction.Interrupted as exc:
             results, interrupted = exc.results, exc.signal_name
     doc = syncsetup.summary(plan, results, warnings) | {"interrupted": interrupted}

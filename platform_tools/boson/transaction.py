@@ -273,43 +273,67 @@ def link_stats(client: BosonClient) -> dict[str, int]:
     return {"requests": client.requests, "timeouts": st.timeouts, "retries": st.retries, "reopens": st.reopens}
 
 
+class _Signals:
+    """SIGINT / SIGTERM during the transaction: the first one's name, and where the transaction was when it came
+    (``phase``, ``last``: the last step is under way; ``failing``: a failure is being put back), for the line
+    said at once (``on_signal``)."""
+
+    def __init__(self, on_signal: Callable[[str], None] | None):
+        self.name: str | None = None
+        self.phase, self.last, self.failing = "read", False, False
+        self._on_signal = on_signal
+
+    def wake(self, signum: int) -> None:
+        """held's wake-up, in the signal handler: the first signal only."""
+        if self.name is not None:
+            return
+        self.name = signal.Signals(signum).name
+        if self._on_signal is None:
+            return
+        if self.failing:
+            what = "a camera failed and every camera is being put back: letting that end"
+        elif self.last:
+            what = f"the last step ({self.phase}) is under way on every camera: letting it end"
+        else:
+            what = f"stopping after the {self.phase} step, then putting every camera back"
+        self._on_signal(f"{self.name}: {what}")
+
+
 def configure_rig(members: list[Member], plan: Plan,
                   on_signal: Callable[[str], None] | None = None) -> list[CameraResult]:
     """Run ``plan`` on every camera as one transaction (see the module's doc); returns the results in
     the order of ``members``, each with its ``link`` statistics. Never raises for a camera problem: it is
     in the results. SIGINT / SIGTERM are held meanwhile (main thread only: where Python runs handlers);
-    ``on_signal(name)`` is told at once when the first comes; :class:`Interrupted` when it stopped the
-    transaction."""
-    came: list[str] = []
-
-    def wake(signum: int) -> None:
-        if not came:
-            came.append(signal.Signals(signum).name)
-            if on_signal is not None:
-                on_signal(came[0])
-    with held(wake=wake) as signals:
+    ``on_signal(line)`` is told at once, when the first comes, what happens next; :class:`Interrupted` when
+    it stopped the transaction."""
+    sig = _Signals(on_signal)
+    with held(wake=sig.wake) as signals:
         try:
-            stopped = _transaction(members, plan, lambda: came[0] if came else None)
+            stopped = _transaction(members, plan, sig)
         finally:
             for m in members:
                 m.result.link = link_stats(m.client)
             signals.came.clear()            # acted on here: not raised again as the block ends
     results = [m.result for m in members]
     if stopped:
-        raise Interrupted(came[0], results)
-    if came:
+        raise Interrupted(sig.name, results)
+    if sig.name is not None:
+        note = ("came during the last step, which ended on every camera: the set-up is complete"
+                if all(r.ok for r in results) else "came as the set-up failed; every camera was put back as "
+                                                   "after any failure")
         for r in results:
-            r.warnings.append(f"{came[0]} came during the last step, which ended on every camera: the set-up "
-                              f"is complete")
+            r.warnings.append(f"{sig.name} {note}")
     return results
 
 
-def _transaction(members: list[Member], plan: Plan, interrupted: Callable[[], str | None]) -> bool:
-    """The phases (the module's doc); True when an interrupt stopped them (and every camera was put back)."""
+def _transaction(members: list[Member], plan: Plan, sig: _Signals) -> bool:
+    """The phases (the module's doc); True when a signal stopped them (and every camera was put back)."""
     for m in members:
         m.result.status = "pending"
+    sig.last = plan.dry_run                 # a dry run's read is its only step
     failed = _phase(members, lambda m: _read(m, plan))
     if failed:
+        sig.failing = True
         _fail(members, failed, "read", plan)
         return False
     if plan.dry_run:
@@ -323,16 +347,16 @@ def _transaction(members: list[Member], plan: Plan, interrupted: Callable[[], st
         steps.append(("trigger check", lambda m: _check_trigger(m, plan)))
     if plan.persist:
         steps.append(("persist", lambda m: _persist(m, plan)))
-    done = "read"
-    for name, step in steps:
-        if interrupted():
-            _stop(members, interrupted(), done, plan)
+    for k, (name, step) in enumerate(steps):
+        if sig.name is not None:
+            _stop(members, sig.name, sig.phase, plan)
             return True
+        sig.phase, sig.last = name, k == len(steps) - 1
         failed = _phase(members, step)
         if failed:
+            sig.failing = True
             _fail(members, failed, name, plan)
             return False
-        done = name
     for m in members:
         m.result.status = "configured" if m.touched or m.result.persisted else "unchanged"
     per_camera(members, lambda m: _final_read(m, plan))

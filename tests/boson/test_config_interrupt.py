@@ -72,7 +72,7 @@ def test_a_stop_after_the_switch_puts_every_camera_back(make_boson, sig):
     for e in emus:                          # the truth: RAM and flash as they were, flash never written
         assert e.state.settings == FACTORY and e.state.flash == FACTORY and e.state.flash_writes == 0
     lines = [line for line in err.splitlines() if "writing SLAVE mode to flash" not in line]   # --persist's warning
-    assert f"{name}: stopping after the step in progress" in lines[0], err             # said once, at once
+    assert f"{name}: stopping after the apply step, then putting" in lines[0], err     # said once, at once
     assert len(lines) == 3 and all("error" in line and "reverted" in line for line in lines[1:]), err  # per camera
 
 
@@ -100,5 +100,6 @@ def test_a_stop_during_the_flash_write_lets_it_end_on_both_cameras(make_boson):
     assert doc["interrupted"] is None and doc["ok"]
     assert [c["status"] for c in doc["cameras"]] == ["configured", "configured"]
     assert all(any("SIGINT came during the last step" in w for w in c["warnings"]) for c in doc["cameras"])
+    assert "SIGINT: the last step (persist) is under way on every camera: letting it end" in err
     for e in emus:                          # both flashes new: not one new and one old
         assert _slave(e) and e.state.flash == e.state.settings and e.state.flash_writes == 1
