@@ -123,7 +123,8 @@ def report_lines(doc: dict) -> list[str]:
     """The human-readable report of a ``boson-config`` run (its JSON document): the mode, then each
     camera's status, changes, frame rate, warnings, and what it holds now when it was reverted or failed."""
     out = [f"external sync -> {doc['mode']}" + (" (dry run)" if doc["dry_run"] else "") +
-           (", persisted to flash" if doc["persist"] and not doc["dry_run"] else "")]
+           ((", persisted to flash" if doc["ok"] else ", --persist: not completed (see each camera)")
+            if doc["persist"] and not doc["dry_run"] else "")]
     if doc.get("interrupted"):
         out.append(f"stopped by {doc['interrupted']}: every camera was put back")
     for cam in doc["cameras"]:

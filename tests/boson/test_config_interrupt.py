@@ -28,11 +28,12 @@ LATE = "delay:s=0.25"
 WAIT_S = 60
 
 
-def _start(*extra: str) -> subprocess.Popen:
+def _start(*extra: str, json_out: bool = True) -> subprocess.Popen:
     """The real command, in its own process group, with Ctrl-C at its default (as a terminal's foreground job has
     it; a background job started by a shell without job control ignores SIGINT)."""
     return subprocess.Popen([sys.executable, "-m", "platform_tools.cli.main", "boson-config", "--slave", "--persist",
-                             *RIG_SERIALS, "--timeout", "1", "--retries", "2", "--json", *extra],
+                             *RIG_SERIALS, "--timeout", "1", "--retries", "2", *(["--json"] if json_out else []),
+                             *extra],
                             cwd=REPO, env=os.environ.copy(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, start_new_session=True,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
@@ -76,15 +77,39 @@ def test_a_stop_after_the_switch_puts_every_camera_back(make_boson, sig):
     assert len(lines) == 3 and all("error" in line and "reverted" in line for line in lines[1:]), err  # per camera
 
 
-def test_a_stop_while_the_cameras_are_read_writes_nothing(make_boson):
+@pytest.mark.parametrize("json_out", [True, False], ids=["json", "table"])
+def test_a_stop_while_the_cameras_are_read_writes_nothing(make_boson, json_out):
     emus = [make_boson(LEFT, faults=LATE), make_boson(RIGHT, faults=LATE)]
-    p = _start("--no-read-flash")
+    p = _start("--no-read-flash", json_out=json_out)
     _wait(lambda: all(e.requests >= 2 for e in emus), p, "both cameras to be read")
     p.send_signal(signal.SIGINT)
     out, err = p.communicate(timeout=WAIT_S)
     assert p.returncode == 130, err
+    if json_out:
+        doc = json.loads(out)
+        assert [c["status"] for c in doc["cameras"]] == ["aborted", "aborted"], doc["cameras"]
+    else:
+        lines = out.splitlines()
+        assert "persisted" not in lines[0] and lines[1] == "stopped by SIGINT: every camera was put back", out
+        rows = [line.split() for line in lines if line.startswith("  ") and not line.startswith("    ")]
+        assert [r[3] for r in rows] == ["aborted", "aborted"], out
+    for e in emus:
+        assert e.state.settings == FACTORY and e.state.flash_writes == 0
+
+
+def test_a_stop_as_a_camera_fails_lets_its_revert_end_and_says_so(make_boson):
+    # the right camera refuses its second write (the display mode), after the sync mode: the apply step fails
+    refused = f"busy:fid=0x{C.SET_DISPLAY_MODE.function_id:08X}"
+    emus = [make_boson(LEFT, faults=LATE), make_boson(RIGHT, faults=f"{LATE},{refused}")]
+    p = _start("--display-mode", "one-shot")
+    _wait(lambda: any(_slave(e) for e in emus), p, "a camera to switch to slave")
+    p.send_signal(signal.SIGINT)
+    out, err = p.communicate(timeout=WAIT_S)
+    assert p.returncode == 1, err           # the failure is the outcome; the signal changed nothing
     doc = json.loads(out)
-    assert [c["status"] for c in doc["cameras"]] == ["aborted", "aborted"], doc["cameras"]
+    assert doc["interrupted"] is None and [c["status"] for c in doc["cameras"]] == ["reverted", "reverted"]
+    assert "CamBusy" in doc["cameras"][1]["error"]
+    assert all(any("SIGINT came as the set-up failed" in w for w in c["warnings"]) for c in doc["cameras"])
     for e in emus:
         assert e.state.settings == FACTORY and e.state.flash_writes == 0
 
