@@ -81,7 +81,7 @@ class held:
     """``with held(wake) as deliver:`` SIGINT and SIGTERM recorded instead of run while the block runs (in the main
     thread, the only one where Python runs handlers; elsewhere the block changes nothing). ``wake(signum)`` is
     called in the handler as each comes: it must be safe there (``queue.SimpleQueue.put``, documented as
-    reentrant, is; so is printing a line).
+    reentrant, is; printing a line is, where the code the signal lands in does not print to the same stream).
     ``deliver()`` runs the first held one's handler where the block calls it (:meth:`Held.__call__`); on leaving
     the block the handlers are restored and the first signal still held is raised again, so its handler runs then.
     Blocks nest: an inner block's leftover signal goes to the outer block's record."""
