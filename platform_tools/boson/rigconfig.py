@@ -71,7 +71,6 @@ class Outcome:
     """What a ``boson-config`` run ended with."""
     doc: dict                                  # syncsetup.summary: what --json prints
     results: list[syncsetup.CameraResult]
-    interrupted: str | None = None             # the signal that stopped the transaction (every camera put back)
 
     @property
     def late_warnings(self) -> list[str]:
@@ -87,7 +86,7 @@ class Outcome:
     def exit_code(self) -> int:
         """130 when a signal stopped the set-up (every camera put back), 2 when a port could not be opened
         (does not exist, denied, in use), 1 when a camera failed, else 0."""
-        if self.interrupted:
+        if self.doc["interrupted"]:             # the signal that stopped the set-up
             return EXIT_INTERRUPTED
         if any(r.port_problem for r in self.results):
             return 2
@@ -110,8 +109,7 @@ def configure(rig, plan: syncsetup.Plan, *, camera: str = "all", port: str | Non
             results = configure_targets(targets, pool, plan, warn)
         except transaction.Interrupted as exc:
             results, interrupted = exc.results, exc.signal_name
-    doc = syncsetup.summary(plan, results, warnings) | {"interrupted": interrupted}
-    return Outcome(doc, results, interrupted)
+    return Outcome(syncsetup.summary(plan, results, warnings) | {"interrupted": interrupted}, results)
 
 
 def _each(warn: Warn, lines: Iterable[str]) -> None:

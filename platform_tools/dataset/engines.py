@@ -141,62 +141,62 @@ class Pool:
         """``work(task)`` for every task, ``finished(task, result)`` here as each ends. On any error or interrupt
         (SIGINT, or SIGTERM where the command turns it into one), the queued tasks are cancelled and every worker
         is stopped at once (a task in flight is abandoned, its chunk redone on resume) before the exception goes
-        on. An interrupt acts between two tasks' ends, never inside concurrent.futures (:mod:`platform_tools.rig.interrupts`)."""
+        on."""
         bar = iter(_bar(len(tasks)))
-        ends = queue.SimpleQueue()          # the futures as they end (their done-callbacks), and wake-ups
-        with held(wake=lambda signum: ends.put(None)) as deliver:
-            try:
-                self._warm_workers()                # no map came first (an index read here)
-                pending = {}
-                for t in tasks:
-                    f = self._pool.submit(work, t)
-                    pending[f] = t
-                    f.add_done_callback(ends.put)
-                while pending:
-                    deliver()
-                    f = ends.get()
-                    if f is None or f not in pending:       # a signal's wake-up
-                        continue
-                    finished(pending.pop(f), f.result())
-                    next(bar, None)
-                deliver()
-            except BrokenProcessPool as exc:
-                self.close(abort=True)
-                raise _died(exc) from None
-            except BaseException:
-                self.close(abort=True)
-                raise
+
+        def ended(k: int, f) -> None:
+            finished(tasks[k], f.result())
+            next(bar, None)
+        self._each_end([(work, (t,)) for t in tasks], ended, warm_first=True, keep_on_error=False)
 
     def map(self, fn, args: list[tuple], done=None) -> list:
         """``fn(*a)`` for each ``a`` of ``args`` in the workers, the results in that order (the index's chunk scans,
         :mod:`.indexscan`); ``done(k)`` is called here as the k-th ends (a progress bar). An error of ``fn`` cancels
         what is queued and goes on here; an interrupt stops every worker (as :meth:`run`)."""
-        ends = queue.SimpleQueue()
+        def ended(k: int, f) -> None:
+            f.result()                          # an error ends the map now
+            if done is not None:
+                done(k)
+        futures = self._each_end([(fn, a) for a in args], ended, warm_first=False, keep_on_error=True)
+        return [f.result() for f in futures]
+
+    def _each_end(self, calls: list[tuple], ended, warm_first: bool, keep_on_error: bool) -> list:
+        """``fn(*a)`` for each ``(fn, a)`` of ``calls`` in the workers, and ``ended(k, future)`` here as the k-th
+        ends; the futures, in order. Each forked worker's warm-up is queued before the calls (``warm_first``: a run
+        with no map before it) or after them (the map's scans do not need it). The wait is a queue that each
+        future's done-callback feeds, and SIGINT / SIGTERM are held meanwhile and run between two ends, never
+        inside concurrent.futures (platform_tools.rig.interrupts: its wait, which takes every pending future's lock
+        in turn, left some taken when a handler raised there). On an error the queued calls are cancelled, and the
+        workers stopped unless ``keep_on_error`` (an exception of a call, or of ``ended``); on an interrupt or a
+        dead worker they are stopped."""
+        ends = queue.SimpleQueue()          # the futures as they end, and a signal's wake-up (None)
         futures = []
         with held(wake=lambda signum: ends.put(None)) as deliver:
             try:
-                for a in args:
+                if warm_first:
+                    self._warm_workers()
+                for fn, a in calls:
                     f = self._pool.submit(fn, *a)
                     futures.append(f)
                     f.add_done_callback(ends.put)
-                self._warm_workers()                # each worker, once its last call is done
+                if not warm_first:
+                    self._warm_workers()        # each worker, once its last call is done
                 place = {f: k for k, f in enumerate(futures)}
                 left = len(futures)
                 while left:
                     deliver()
                     f = ends.get()
-                    if f is None or f not in place:
-                        continue
-                    left -= 1
-                    f.result()                  # an error ends the map now
-                    if done is not None:
-                        done(place[f])
+                    if f is not None:
+                        left -= 1
+                        ended(place[f], f)
                 deliver()
-                return [f.result() for f in futures]
+                return futures
             except BrokenProcessPool as exc:
                 self.close(abort=True)
                 raise _died(exc) from None
             except Exception:
+                if not keep_on_error:
+                    self.close(abort=True)
                 for f in futures:
                     f.cancel()
                 raise
