@@ -8,6 +8,10 @@
 # 2. .venv on /usr/bin/python3 with --system-site-packages, so that Debian's mrcal
 #    and its numpy 1.x are the ones Python imports.
 # 3. pip install -e '.[dev]' into it, redone only when pyproject.toml changes.
+# 4. the export's numba kernels compiled ahead of time into an extension module for this
+#    machine (platform_tools/dataset/kernels.py), redone only when their sources, numba or the
+#    CPU change: the export's workers then start without importing numba. A failed build only
+#    warns: the export uses numba's JIT instead (the same results, 0.3 s of CPU more per worker).
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -76,4 +80,10 @@ if [[ ! -f $stamp || $(cat "$stamp") != "$want" ]]; then
     "$VENV/bin/python" -c 'import mrcal, numpy, cv2, cadquery; assert numpy.__version__ < "2"' \
         || { say "mrcal does not import in $VENV (numpy $("$VENV/bin/python" -c 'import numpy; print(numpy.__version__)'))"; exit 1; }
     echo "$want" >"$stamp"
+fi
+
+if ! out=$("$VENV/bin/python" -m platform_tools.dataset.kernels build 2>&1); then
+    say "warning: ${out##*$'\n'} (the export will use numba's JIT)"
+elif [[ $out != *"already built"* ]]; then
+    say "${out}"
 fi

@@ -7,6 +7,8 @@
 - ``calib``      the export's calibration: mrcal camera models (nominal from the rig, or calibrated
                  .cameramodel files) at the recorded image sizes
 - ``register``   RGB into a thermal view from depth: z-buffer, bilinear splatting, validity mask
+- ``register_kernels``  its numba loops (imported only to compile them)
+- ``kernels``    the compiled kernels: an extension built ahead of time for this machine, else numba's JIT
 - ``pairing``    four-camera pairing, FFC filtering, sampling at a rate
 - ``decode``     a recording's image messages to numpy arrays
 - ``chunk``      one unit of the export's work: decode, convert, register, write a chunk of samples

@@ -16,7 +16,6 @@ import numpy as np
 from . import encode, thermal8
 from .calib import FRAME_OF, model_from_dict, rt_a_b
 from .decode import IMAGE_STREAMS, Encoded, iter_frames
-from .engines import numba_without_blas_probe
 from .recording import THERMAL, RecordingError
 from .workers import keep_freed_memory
 
@@ -145,11 +144,11 @@ def preload() -> None:
 
 def warm_up() -> None:
     """Make this process ready for :func:`process_chunk` before its first task (engines.Pool runs it in each worker:
-    a spawned one as it starts, a forked one after the index): the numba kernels of the 8-bit conversion and the
-    registration loaded, mrcal and the MCAP reader imported. No OpenCV call (a thread pool OpenCV started would not
-    survive a fork). numba's registries are loaded without scipy.linalg (engines.numba_without_blas_probe)."""
+    a spawned one as it starts, a forked one after the index): the kernels of the 8-bit conversion and the
+    registration loaded (:mod:`.kernels`: the extension built ahead of time, without numba; else numba's, its
+    registries loaded without scipy.linalg), mrcal and the MCAP reader imported. No OpenCV call (a thread pool OpenCV
+    started would not survive a fork)."""
     preload()
-    numba_without_blas_probe()
     from . import register
     thermal8.warm_up()
     register.warm_up()

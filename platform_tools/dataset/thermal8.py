@@ -10,8 +10,8 @@ with type "firestereo"):
 The parameters come from ``processing.thermal_8bit``. The result is bit-identical to that
 definition (tests/dataset check it against a direct transcription); it is only faster: order
 statistics from a 65536-bin histogram instead of a sort (only when the clip applies), and step 2
-as a lookup table over the counts between lo and hi, applied by a numba kernel compiled (or loaded from numba's
-cache) on the first conversion: numba is imported then, not with this module, so a process that only plans an
+as a lookup table over the counts between lo and hi, applied by a kernel loaded on the first conversion
+(:mod:`.kernels`: compiled ahead of time, or by numba): never with this module, so a process that only plans an
 export (the parent, which needs :class:`Params`) never pays numba's import (0.7 s of CPU; docs/dataset.md "Speed").
 One deliberate difference: a flat frame
 (hi == lo), which the original turns into
@@ -90,15 +90,11 @@ def _apply(raw, lut, lo, hi, out):
         out[i] = lut[0] if v <= lo else (lut[hi - lo] if v >= hi else lut[v - lo])
 
 
-_compiled: list = []
-
-
 def _kernel():
-    """:func:`_apply` compiled by numba (cached on disk like every kernel of this package), imported on first use."""
-    if not _compiled:
-        import numba
-        _compiled.append(numba.njit(cache=True)(_apply))
-    return _compiled[0]
+    """:func:`_apply` compiled (:mod:`.kernels`: the extension built ahead of time, or numba's JIT, cached on disk,
+    imported on first use)."""
+    from .kernels import get
+    return get("apply_lut")
 
 
 def warm_up() -> None:

@@ -176,7 +176,7 @@ def test_register_u8_writes_the_pixels_of_the_float_path(scene):
 
 
 def _splat_reference(uvz, src, h, w, tol):
-    """The two passes of register._splat_packed as plain Python, point by point and corner by corner in the same
+    """The two passes of register_kernels._splat_packed as plain Python, point by point and corner by corner in the same
     order: the same sums to the bit."""
     zbuf = np.full((h, w), np.inf)
     packed = np.zeros((h, w, src.shape[1] + 2))
@@ -205,7 +205,7 @@ def test_splat_on_the_rim_and_on_whole_pixels_is_the_reference_to_the_bit(channe
     the plain two-pass loop gives, bit for bit: points anywhere in (-1, w) x (-1, h), on whole and half pixels (zero
     weights), on the last row and column, occluding one another (a z-buffer that differs from pixel to pixel, some
     points within its tolerance)."""
-    from platform_tools.dataset.register import _splat_packed
+    from platform_tools.dataset.register_kernels import _splat_packed
     rng = np.random.default_rng(7)
     h, w, tol = 12, 16, 0.02
     uv = np.concatenate([rng.uniform([-1, -1], [w, h], (300, 2)),

@@ -1,4 +1,4 @@
-"""The registration's three-colour pass (register._blend3: each point's colour read once, a corner's five sums at one
+"""The registration's three-colour pass (register_kernels._blend3: each point's colour read once, a corner's five sums at one
 offset of the flattened accumulator) adds exactly what the general loop adds: each colour splatted alone through the
 general loop (one channel) gives, to the bit, that colour's sums, the weight sums and the depth sums of the
 three-colour splat. Points overlap (several per pixel, at depths inside and outside the z-buffer's tolerance), fall
@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from platform_tools.dataset import register
+from platform_tools.dataset import register_kernels
 
 H, W = 48, 64
 
@@ -25,7 +25,7 @@ def _points(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
 def _splat(uvz, idx, src, tol=0.02) -> np.ndarray:
     packed = np.zeros((H, W, src.shape[1] + 2))
     zbuf = np.full((H, W), np.inf)
-    register._splat_packed(uvz, idx, len(idx), src, H, W, tol, zbuf, packed)
+    register_kernels._splat_packed(uvz, idx, len(idx), src, H, W, tol, zbuf, packed)
     return packed
 
 

@@ -1,5 +1,6 @@
-"""The export's workers start before the work is known (engines.started) and are ready when it comes: numba's kernels
-loaded by chunk.warm_up with the argument types of the real call (no second specialisation), mrcal imported with the
+"""The export's workers start before the work is known (engines.started) and are ready when it comes: the kernels
+loaded by chunk.warm_up (the extension compiled ahead of time, without numba; or numba's, with the argument types of
+the real call: no second specialisation), mrcal imported with the
 standard library's distutils; on Linux (the default there) the workers are forked from the exporting process and each
 runs the warm-up once, after the index's scans (the pool's first map, which does not wait for it) or before the first
 chunk; spawned workers run it as they start; an exception in the block stops them; a process running chunks reuses
@@ -14,26 +15,33 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 
-from platform_tools.dataset import engines
+from platform_tools.dataset import engines, kernels
 from platform_tools.dataset.chunk import warm_up
 from tests.conftest import REPO
 
 pytestmark = pytest.mark.slow          # spawned processes that import numba and mrcal
 
 
-#: the registration's numba kernels an export calls
-KERNELS = ("_points_compact", "_splat_packed", "_finish_u8")
+#: the kernels an export calls (platform_tools.dataset.kernels)
+KERNELS = tuple(kernels.KERNELS)
+
+
+def _loaded(k) -> int | str:
+    """What a process holds of one kernel: 0 (not loaded), "extension", or the JIT dispatcher's count of compiled
+    specialisations."""
+    if k is None:
+        return 0
+    return "extension" if isinstance(k, kernels.Checked) else len(k.signatures)
 
 
 def _state(_task=None) -> dict:
     """What a worker holds when its first task starts (run as that task, before anything else)."""
-    from platform_tools.dataset import register, thermal8
     return {"pid": os.getpid(), "mcap": "mcap.reader" in sys.modules, "mrcal": "mrcal" in sys.modules,
-            "setuptools": "setuptools" in sys.modules,
-            "kernels": {n: len(getattr(register, n).signatures) for n in KERNELS}
-            | {"_apply": len(thermal8._compiled[0].signatures) if thermal8._compiled else 0},
+            "setuptools": "setuptools" in sys.modules, "numba": "numba" in sys.modules,
+            "kernels": {n: _loaded(kernels._got.get(n)) for n in KERNELS},
             "env": os.environ.get("SETUPTOOLS_USE_DISTUTILS")}
 
 
@@ -81,51 +89,71 @@ def _warm_noting(where: str) -> None:
         f.write(f"{os.getpid()}\n")
 
 
-def _pool_run(tmp_path, method: str | None = None, first: str = "run") -> tuple[dict, list[int]]:
+@pytest.fixture(scope="module")
+def built(tmp_path_factory) -> str:
+    """A folder with the kernels' extension for this machine (what the bootstrap builds beside the package)."""
+    where = tmp_path_factory.mktemp("kernels")
+    r = subprocess.run([sys.executable, "-m", "platform_tools.dataset.kernels", "build", "--dir", str(where)],
+                       cwd=REPO, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    return str(where)
+
+
+def _pool_run(tmp_path, method: str | None = None, first: str = "run", kernels_env: str = "jit") \
+        -> tuple[dict, list[int]]:
     """(what _POOL printed, the pids the warm-up ran in); ``method``: engines.START_ENV set to it; ``first``: "map"
-    (5 map calls before the tasks, as the export's index) or "run" (the tasks only)."""
+    (5 map calls before the tasks, as the export's index) or "run" (the tasks only); ``kernels_env``: kernels.ENV
+    ("jit", or the folder of an extension)."""
     where = tmp_path / "warmed"
-    env = {k: v for k, v in os.environ.items() if k != engines.START_ENV} | ({engines.START_ENV: method} if method else {})
+    env = {k: v for k, v in os.environ.items() if k not in (engines.START_ENV, kernels.ENV)} \
+        | ({engines.START_ENV: method} if method else {}) | {kernels.ENV: kernels_env}
     r = subprocess.run([sys.executable, "-c", _POOL, str(where), first], cwd=REPO, capture_output=True, text=True,
                        timeout=600, env=env)
     assert r.returncode == 0, r.stderr
     return json.loads(r.stdout.strip().splitlines()[-1]), [int(x) for x in where.read_text().split()]
 
 
-def _check_warm(out: dict) -> None:
+def _check_warm(out: dict, extension: bool) -> None:
+    """Each task found its worker warm: the extension's kernels and no numba (``extension``), or each JIT kernel
+    compiled once, for the export's argument types."""
     assert len(out["workers"]) == 2                     # both workers exist before any task is submitted
     assert out["env"][0] is None and out["env"][1] is None      # this process's environment as it was
     assert len(out["got"]) == 6 and {g["pid"] for g in out["got"]} <= set(out["workers"])
     for g in out["got"]:
-        assert g["mcap"] and g["mrcal"] and g["kernels"] == dict.fromkeys(KERNELS, 1) | {"_apply": 1}
+        assert g["mcap"] and g["mrcal"]
+        assert g["kernels"] == dict.fromkeys(KERNELS, "extension" if extension else 1)
+        assert g["numba"] is not extension
         assert g["env"] == "stdlib" and not g["setuptools"]     # mrcal's distutils import did not load setuptools
     assert not any(_alive(p) for p in out["workers"])          # ended with the block
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="workers are forked on Linux only")
-@pytest.mark.parametrize("method,first", [(None, "map"), ("fork", "map"), (None, "run")])
-def test_forked_workers_each_warm_up_once_after_the_index(tmp_path, method, first):
+@pytest.mark.parametrize("method,first,extension", [(None, "map", True), (None, "map", False), ("fork", "map", True),
+                                                    (None, "run", False)])
+def test_forked_workers_each_warm_up_once_after_the_index(tmp_path, built, method, first, extension):
     """On Linux, by default (START_ENV unset) and with START_ENV=fork, the workers are forked from the exporting
     process without the warm-up (it loads nothing of it) and each runs it once: after the pool's first map's calls,
     which run cold (the index's scans need no kernel, and do not wait for them), or, with no map, before the first
-    task. A worker done with its calls early does not take the other's warm-up (each waits for the other)."""
-    out, warmed = _pool_run(tmp_path, method, first)
+    task. A worker done with its calls early does not take the other's warm-up (each waits for the other). With
+    the extension built, no worker imports numba."""
+    out, warmed = _pool_run(tmp_path, method, first, built if extension else "jit")
     assert out["method"] == "fork"
     assert sorted(warmed) == sorted(out["workers"])    # once in each worker, never in the parent
     assert not out["parent_setuptools"]
     if first == "map":
         assert len(out["scans"]) == 5
         for g in out["scans"]:                         # every map call ran before any warm-up
-            assert g["pid"] in out["workers"] and g["kernels"] == dict.fromkeys(KERNELS, 0) | {"_apply": 0}
-    _check_warm(out)
+            assert g["pid"] in out["workers"] and g["kernels"] == dict.fromkeys(KERNELS, 0) and not g["numba"]
+    _check_warm(out, extension)
 
 
-def test_spawned_workers_each_warm_up_before_their_first_task(tmp_path):
+@pytest.mark.parametrize("extension", [True, False])
+def test_spawned_workers_each_warm_up_before_their_first_task(tmp_path, built, extension):
     """With START_ENV=spawn (the default off Linux) each worker runs the warm-up as it starts."""
-    out, warmed = _pool_run(tmp_path, "spawn")
+    out, warmed = _pool_run(tmp_path, "spawn", kernels_env=built if extension else "jit")
     assert out["method"] == "spawn"
     assert sorted(warmed) == sorted(out["workers"])      # in each worker, not in the parent
-    _check_warm(out)
+    _check_warm(out, extension)
 
 
 #: in a fresh interpreter (this test process may hold threads earlier tests left): the start method unset, empty,
@@ -242,27 +270,60 @@ def test_an_exception_in_the_block_stops_the_started_workers():
 
 
 def test_the_warm_up_loads_the_specialisations_a_real_export_uses(sim, tmp_path):
-    """In a fresh process: warm up, then export the simulated recording inline; no kernel gains a signature."""
+    """In a fresh process with numba's JIT: warm up, then export the simulated recording inline; no kernel gains a
+    signature."""
     code = (
         "import json, sys\n"
         "from pathlib import Path\n"
-        "from platform_tools.dataset import chunk, register, thermal8\n"
+        "from platform_tools.dataset import chunk, kernels\n"
         "from platform_tools.dataset.export import Params, export\n"
         "from platform_tools.rig import load_rig\n"
         "def sigs():\n"
-        f"    d = {{n: [str(s) for s in getattr(register, n).signatures] for n in {KERNELS!r}}}\n"
-        "    return d | {'_apply': [str(s) for s in thermal8._kernel().signatures]}\n"
+        "    return {n: [str(s) for s in kernels.jit(n).signatures] for n in kernels.KERNELS}\n"
         "chunk.warm_up()\n"
         "a = sigs()\n"
         "rig = load_rig()\n"
         "export([Path(sys.argv[1])], Path(sys.argv[2]), rig, Params.from_rig(rig, rate_hz=2), engine='inline')\n"
         "print(json.dumps([a, sigs()]))\n")
     r = subprocess.run([sys.executable, "-c", code, str(sim[0]), str(tmp_path / "out")], cwd=REPO,
-                       capture_output=True, text=True, timeout=600)
+                       capture_output=True, text=True, timeout=600, env=os.environ | {kernels.ENV: "jit"})
     assert r.returncode == 0, r.stderr
     warm, after = json.loads(r.stdout.strip().splitlines()[-1])
     assert all(len(v) == 1 for v in warm.values()), warm
     assert after == warm
+
+
+def test_with_the_extension_a_real_export_never_falls_back_to_the_jit(sim, tmp_path, built):
+    """In a fresh process with the extension: export the simulated recording inline; every kernel call had exactly
+    the extension's argument types (kernels.Checked sent none to the JIT), so numba was never imported, and the
+    images are those of an export with numba's JIT."""
+    code = (
+        "import json, sys\n"
+        "from pathlib import Path\n"
+        "from platform_tools.dataset import kernels\n"
+        "from platform_tools.dataset.export import Params, export\n"
+        "from platform_tools.rig import load_rig\n"
+        "rig = load_rig()\n"
+        "export([Path(sys.argv[1])], Path(sys.argv[2]), rig, Params.from_rig(rig, rate_hz=2), engine='inline')\n"
+        "print(json.dumps({'backend': kernels.backend(), 'jitted': sorted(kernels._jitted),\n"
+        "                  'numba': 'numba' in sys.modules}))\n")
+    outs = {}
+    for name, env in (("extension", built), ("jit", "jit")):
+        outs[name] = tmp_path / name
+        r = subprocess.run([sys.executable, "-c", code, str(sim[0]), str(outs[name])], cwd=REPO,
+                           capture_output=True, text=True, timeout=600, env=os.environ | {kernels.ENV: env})
+        assert r.returncode == 0, r.stderr
+        doc = json.loads(r.stdout.strip().splitlines()[-1])
+        if name == "extension":
+            assert doc == {"backend": doc["backend"], "jitted": [], "numba": False}
+            assert doc["backend"].startswith("extension ")
+    import cv2
+    pngs = sorted(p.relative_to(outs["jit"]) for p in outs["jit"].rglob("*.png"))
+    assert len(pngs) > 20 and pngs == sorted(p.relative_to(outs["extension"]) for p in outs["extension"].rglob("*.png"))
+    for p in pngs:
+        a = cv2.imread(str(outs["jit"] / p), cv2.IMREAD_UNCHANGED)
+        b = cv2.imread(str(outs["extension"] / p), cv2.IMREAD_UNCHANGED)
+        assert a.dtype == b.dtype and np.array_equal(a, b), p
 
 
 def _sleep(s: float) -> float:
@@ -421,8 +482,8 @@ def test_a_worker_whose_warm_up_ends_first_starts_the_tasks_without_waiting_for_
 
 
 def test_the_warm_up_loads_numbas_registries_without_scipy_linalg_and_the_outputs_stay_the_same(sim, tmp_path):
-    """Fresh processes, each warming up then exporting the simulated recording inline: the warm-up's process never
-    imports scipy.linalg (numba's BLAS probe, engines.numba_without_blas_probe), even after the export; a process
+    """Fresh processes with numba's JIT kernels (kernels.ENV=jit), each warming up then exporting the simulated
+    recording inline: the warm-up's process never imports scipy.linalg (numba's BLAS probe, engines.numba_without_blas_probe), even after the export; a process
     that imported the probe first (numba's usual start: its BLAS check passes) writes the same images, byte for
     byte."""
     code = (
@@ -442,7 +503,7 @@ def test_the_warm_up_loads_numbas_registries_without_scipy_linalg_and_the_output
     for how in ("probe", "none"):
         out = tmp_path / how
         r = subprocess.run([sys.executable, "-c", code, str(sim[0]), str(out), how], cwd=REPO,
-                           capture_output=True, text=True, timeout=600)
+                           capture_output=True, text=True, timeout=600, env=os.environ | {kernels.ENV: "jit"})
         assert r.returncode == 0, r.stderr
         got[how] = json.loads(r.stdout.strip().splitlines()[-1])
         images[how] = {p.relative_to(out): p.read_bytes() for p in out.rglob("*")
