@@ -20,7 +20,10 @@
    run's 1-minute load average, as it starts, is printed beside it (the machine may be shared). This tree runs
    with its default workers (forked on Linux); ``--spawn`` runs it again with spawned workers
    (``PLATFORM_TOOLS_EXPORT_WORKERS=spawn``) as ``new-spawn``, ``--fork`` with forked ones as ``new-fork`` (the
-   default on Linux: for another system, or a tree whose default was spawn). A full-size recording:
+   default on Linux: for another system, or a tree whose default was spawn), ``--jit`` with numba's JIT kernels
+   instead of the extension compiled ahead of time (``PLATFORM_TOOLS_KERNELS=jit``) as ``new-jit``. A previous tree
+   that has platform_tools/dataset/kernels.py gets its extension built, as its bootstrap would build it; each
+   tree's kernels are printed beside its runs. A full-size recording:
    ``platform_tools simulate-rig --out DIR --duration 12 --scale 1`` (``--duration 60`` for the steady state).
 
 One core for 1 and 2: numba, OpenCV and BLAS are pinned to one thread before they load.
@@ -32,7 +35,7 @@ the disk, as it does a recording larger than the free memory.
    platform_tools/dataset/libzstd.py) beside python-zstandard's bundled one, interleaved, same bytes checked.
 
 Run: .venv/bin/python bench/bench_dataset.py [--frames N] [--json] [--export RECORDING [--rate HZ] [--repeats N]
-     [--spawn] [--fork] [--cold]] [--zstd RECORDING [--chunks N]]
+     [--spawn] [--fork] [--jit] [--cold]] [--zstd RECORDING [--chunks N]]
 """
 from __future__ import annotations
 
@@ -103,7 +106,24 @@ def previous_tree(tmp: Path, rev: str = BASELINE) -> Path:
                              check=True, capture_output=True).stdout
     with tarfile.open(fileobj=__import__("io").BytesIO(archive)) as tar:
         tar.extractall(tree)
+    if (tree / "platform_tools" / "dataset" / "kernels.py").is_file():      # as its bootstrap would leave it
+        subprocess.run([sys.executable, "-m", "platform_tools.dataset.kernels", "build"], cwd=tree,
+                       env=dict(os.environ, PYTHONPATH=str(tree)), check=True, capture_output=True)
     return tree
+
+
+def kernels_backend(tree: Path, extra_env: dict | None = None) -> str:
+    """Which kernels ``tree``'s export uses (platform_tools.dataset.kernels: "extension ..." or "numba JIT"), or
+    "numba JIT" for a tree from before that module."""
+    import subprocess
+    if not (tree / "platform_tools" / "dataset" / "kernels.py").is_file():
+        return "numba JIT"
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    env.pop(KERNELS_ENV, None)
+    env |= extra_env or {}
+    r = subprocess.run([sys.executable, "-m", "platform_tools.dataset.kernels", "status", "--json"], cwd=tree, env=env,
+                       check=True, capture_output=True, text=True)
+    return json.loads(r.stdout)["backend"]
 
 
 def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int,
@@ -118,7 +138,8 @@ def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int
         raise SystemExit(f"{out}: exists; each run writes into a new folder (see bench_export)")
     ru = resource.getrusage(resource.RUSAGE_CHILDREN)
     env = dict(os.environ, PYTHONPATH=str(tree))
-    for var in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", FORK_ENV):
+    for var in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", FORK_ENV,
+                KERNELS_ENV):
         env.pop(var, None)
     env |= extra_env or {}
     cmd = [sys.executable, "-c", "import sys; from platform_tools.cli.main import main; sys.exit(main())",
@@ -205,6 +226,9 @@ def _cached(files) -> int | None:
 FORK_ENV = "PLATFORM_TOOLS_EXPORT_WORKERS"
 
 
+#: which kernels an export uses (platform_tools.dataset.kernels.ENV): "jit" for "new-jit" (--jit); unset for the others
+KERNELS_ENV = "PLATFORM_TOOLS_KERNELS"
+
 #: the untimed warm-up export's rate: a few samples are enough for numba to fill a tree's cache (a fixed rate, so that
 #: a long recording's warm-up stays short)
 WARM_UP_RATE_HZ = 0.25
@@ -232,9 +256,10 @@ def check_room(folder: Path, warm_outputs: list, scale: float, repeats: int) -> 
 
 
 def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, revs=(BASELINE,),
-                 fork: bool = False, spawn: bool = False, cold: bool = False) -> dict:
+                 fork: bool = False, spawn: bool = False, cold: bool = False, jit: bool = False) -> dict:
     """``spawn`` / ``fork``: this tree a second time with its workers spawned ("new-spawn") / forked ("new-fork"),
-    each run beside the others. ``cold``: the recording evicted from the page cache before each timed run
+    each run beside the others; ``jit``: this tree with numba's JIT kernels instead of the extension built ahead of
+    time ("new-jit"). ``cold``: the recording evicted from the page cache before each timed run
     (:func:`evict`).
 
     Every run writes into a folder of its own, and none is deleted before the bench ends: on an ext4 file system
@@ -253,6 +278,9 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
             trees["new-spawn"] = (REPO, {FORK_ENV: "spawn"})
         if fork:
             trees["new-fork"] = (REPO, {FORK_ENV: "fork"})
+        if jit:
+            trees["new-jit"] = (REPO, {KERNELS_ENV: "jit"})
+        kernels = {name: kernels_backend(tree, env) for name, (tree, env) in trees.items()}
         for name, (tree, env) in trees.items():          # warm-up: numba compiles into each tree's cache
             run_export(tree, recording, tmp / f"warm-{name}", WARM_UP_RATE_HZ, workers, env)
         check_room(tmp, [tmp / f"warm-{n}" for n in trees], rate / WARM_UP_RATE_HZ, repeats)
@@ -272,6 +300,7 @@ def bench_export(recording: Path, rate: float, repeats: int, workers: int = 2, r
         sps = {n: samples[n] / min(t) for n, t in times.items()}
         ours = [n for n in trees if n.startswith("new")]
         return {"recording": str(recording), "rate_hz": rate, "workers": workers, "samples": samples,
+                "kernels": kernels,
                 "cold": cold, "resident_bytes_at_start": resident,
                 "seconds": times, "samples_per_s": sps, "cpu_seconds": cpu, "load_average": loads,
                 "ratio": {f"{n} / {rev}": sps[n] / sps[rev] for n in ours for rev in revs},
@@ -340,6 +369,8 @@ def main(argv=None) -> int:
                     help=f"with --export: the git revision of the previous code (repeatable; default {BASELINE})")
     ap.add_argument("--fork", action="store_true",
                     help=f"with --export: also this tree with its workers forked ({FORK_ENV}=fork), as new-fork")
+    ap.add_argument("--jit", action="store_true",
+                    help=f"with --export: also this tree with numba's JIT kernels ({KERNELS_ENV}=jit), as new-jit")
     ap.add_argument("--spawn", action="store_true",
                     help=f"with --export: also this tree with its workers spawned ({FORK_ENV}=spawn), as new-spawn")
     ap.add_argument("--cold", action="store_true",
@@ -366,7 +397,7 @@ def main(argv=None) -> int:
         return 0
     if args.export:
         r = bench_export(args.export, args.rate, args.repeats, revs=tuple(args.previous or (BASELINE,)),
-                         fork=args.fork, spawn=args.spawn, cold=args.cold)
+                         fork=args.fork, spawn=args.spawn, cold=args.cold, jit=args.jit)
         if args.json:
             print(json.dumps(r, indent=2))
             return 0
@@ -384,7 +415,7 @@ def main(argv=None) -> int:
             print(f"  {n:<10} {r['samples'][n]:>5} samples in {min(r['seconds'][n]):7.1f} s: "
                   f"{r['samples_per_s'][n]:6.2f} samples/s  (runs: {', '.join(f'{t:.1f}' for t in r['seconds'][n])} s;"
                   f" CPU {', '.join(f'{t:.1f}' for t in r['cpu_seconds'][n])} s; load average "
-                  f"{', '.join(f'{t:.1f}' for t in r['load_average'][n])})")
+                  f"{', '.join(f'{t:.1f}' for t in r['load_average'][n])}; kernels: {r['kernels'][n]})")
         for pair, ratio in r["ratio"].items():
             o = r["outputs"][pair]
             ours, rev = pair.split(" / ")
