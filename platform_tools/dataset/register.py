@@ -109,36 +109,47 @@ class Registrar:
 
     def points(self, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(u, v, z) in the thermal image of every ZED pixel, flattened; NaN where there is none."""
-        uvz, idx, n = self._in_view(depth)
+        uvz, idx, n, _, _ = self._in_view(depth)
         out = np.full((3, depth.size), np.nan)
         out[:, idx[:n]] = uvz[:n].T
         return out[0], out[1], out[2]
 
-    def _in_view(self, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-        """register_kernels._points_compact of a depth map: (uvz, idx, how many)."""
+    def _in_view(self, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray, int, np.ndarray, np.ndarray]:
+        """register_kernels._points_compact of a depth map: (uvz, idx, how many, row_start, row_reach)."""
         depth = np.ascontiguousarray(depth, np.float32)
         if depth.shape != self.rays.shape[:2]:
             raise ValueError(f"depth is {depth.shape[1]}x{depth.shape[0]}, the ZED model "
                              f"{self.rays.shape[1]}x{self.rays.shape[0]}")
         uvz, idx = np.empty((depth.size, 3), np.float64), np.empty(depth.size, np.int64)
+        row_start, row_reach = np.empty(depth.shape[0] + 1, np.int64), np.empty((depth.shape[0], 2), np.int64)
         qext = self._external_projection(depth) if self.kind == KIND_MRCAL else np.zeros((1, 2))
         n = get("points_compact")(depth, self.rays, self.R, self.t, self.kind, self.k, qext, self.out_w, self.out_h,
-                                  uvz, idx)
-        return uvz, idx, n
+                                  uvz, idx, row_start, row_reach)
+        return uvz, idx, n, row_start, row_reach
 
-    def _packed(self, depth: np.ndarray, src: np.ndarray) -> np.ndarray:
-        """The packed accumulator (h, w, C + 2) of the splat's two passes (register_kernels._splat_packed)."""
-        uvz, idx, n = self._in_view(depth)
+    def _splat(self, depth: np.ndarray, src: np.ndarray, u8: bool):
+        """Both passes of the splat of ``src`` (register_kernels._zbuffer, _blend_rows): with ``u8``, the export's
+        images (image (h, w, C), mask, depth_mm, valid count) converted row by row from a ring of rows
+        (:func:`ring_plan`); without, the sums of the whole image (h, w, C + 2)."""
+        uvz, idx, n, row_start, row_reach = self._in_view(depth)
         flat = src.reshape(idx.shape[0], -1)
-        C = flat.shape[1]
-        packed = np.zeros((self.out_h, self.out_w, C + 2), np.float64)
-        zbuf = np.full((self.out_h, self.out_w), np.inf)
-        get("splat_packed")(uvz, idx, n, flat, self.out_h, self.out_w, self.tol, zbuf, packed)
-        return packed
+        h, w, C = self.out_h, self.out_w, flat.shape[1]
+        zbuf = np.full((h, w), np.inf)
+        get("zbuffer")(uvz, n, h, w, zbuf)
+        if u8:
+            final_below, rows = ring_plan(row_reach, h)
+            image, mask, depth_mm = np.empty((h, w, C), np.uint8), np.empty((h, w), np.uint8), np.empty((h, w), np.uint16)
+        else:
+            final_below, rows = np.zeros(len(row_reach), np.int64), _pow2(h)
+            image, mask, depth_mm = np.empty((1, 1, C), np.uint8), np.empty((1, 1), np.uint8), np.empty((1, 1), np.uint16)
+        ring = np.zeros((rows, w, C + 2))
+        valid = get("blend_rows")(uvz, idx, flat, h, w, self.tol, zbuf, row_start, final_below, ring, int(u8),
+                                  self.min_weight, image, mask, depth_mm)
+        return (image, mask, depth_mm, valid) if u8 else ring[:h]
 
     def _accumulate(self, depth: np.ndarray, src: np.ndarray):
         """(colour sums (h, w, C), weight sum, depth sum) of the splat."""
-        packed = self._packed(depth, src)
+        packed = self._splat(depth, src, u8=False)
         C = packed.shape[2] - 2
         return packed[..., :C], packed[..., C], packed[..., C + 1]
 
@@ -149,13 +160,26 @@ class Registrar:
     def register_u8(self, depth: np.ndarray, src: np.ndarray) -> "Images":
         """The export's images of :meth:`register` in one pass (numba): the same pixels as
         ``Result.image_u8()``, ``mask * 255`` and the depth in mm that the export writes."""
-        packed = self._packed(depth, src)
-        h, w, C = packed.shape[0], packed.shape[1], packed.shape[2] - 2
-        image = np.empty((h, w, C), np.uint8)
-        mask = np.empty((h, w), np.uint8)
-        depth_mm = np.empty((h, w), np.uint16)
-        n = get("finish_u8")(packed, self.min_weight, image, mask, depth_mm)
-        return Images(image if C > 1 else image[..., 0], mask, depth_mm, n / (h * w))
+        image, mask, depth_mm, valid = self._splat(depth, src, u8=True)
+        h, w, C = image.shape
+        return Images(image if C > 1 else image[..., 0], mask, depth_mm, valid / (h * w))
+
+
+def _pow2(n: int) -> int:
+    """The smallest power of two at or above ``n`` (1 for 1 or less)."""
+    return 1 << max(0, int(n) - 1).bit_length()
+
+
+def ring_plan(row_reach: np.ndarray, out_h: int) -> tuple[np.ndarray, int]:
+    """The ring of thermal rows of register_kernels._blend_rows, from ``row_reach`` (H, 2: the lowest and the highest
+    thermal row each ZED row's points reach, register_kernels._points_compact): (final_below (H,): the thermal rows
+    below final_below[r] are reached by no point of ZED row r or after, so they are final before row r; the ring's
+    row count: the smallest power of two at or above the most rows open at once, from final_below[r] to the highest
+    row reached by ZED rows 0..r, at most ``out_h``'s)."""
+    lowest_after = np.minimum.accumulate(row_reach[::-1, 0])[::-1]
+    highest_so_far = np.maximum.accumulate(row_reach[:, 1])
+    open_rows = int((highest_so_far - lowest_after + 1).max(initial=1))
+    return np.ascontiguousarray(np.clip(lowest_after, 0, out_h), np.int64), min(_pow2(open_rows), _pow2(out_h))
 
 
 @dataclass

@@ -1,7 +1,16 @@
 """The registration's numba kernels (:mod:`.register` holds what calls them): the projection of the ZED points into a
-thermal view, the splat's two passes and the final pass to the export's 8-bit images. Imported only to compile them:
-by numba's JIT on first use, or by the ahead-of-time build (:mod:`.kernels`), so that a process running the
-export's samples from the built extension never imports numba.
+thermal view (:func:`_points_compact`), the splat's pass 0 into the z-buffer (:func:`_zbuffer`) and its pass 1 with
+the final conversion to the export's 8-bit images (:func:`_blend_rows`). Imported only to compile them: by numba's
+JIT on first use, or by the ahead-of-time build (:mod:`.kernels`), so that a process running the export's samples
+from the built extension never imports numba.
+
+Pass 1 accumulates into a ring of thermal rows, not into a whole image: the points come in the ZED's row order, and
+the points of one ZED row reach a band of thermal rows (39 of 512 for the rig's left Boson). Once no later point can
+reach a thermal row, that row's sums are final: it is converted to its output pixels and its ring row zeroed for the
+row that takes its place. The sums are the whole-image accumulator's (the same additions in the same order), but a
+ring of 64 rows (1.6 MB at 640 px) stays in a core's cache where the whole accumulator (13 MB) went to memory three
+times (zeroed, summed into, read); the registration became 1.1-1.2 times faster under an export's load
+(docs/dataset.md "Speed").
 
 Every kernel is compiled with numba's ``error_model="numpy"``: a division is the IEEE one (what numpy does), with no
 test of its divisor for zero and no ZeroDivisionError to raise. The divisors here are positive where a result is
@@ -44,6 +53,17 @@ def _corner(u0, v0, fu, fv, corner):
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
+def _point(uvz, j):
+    """Point ``j`` of ``uvz`` (u, v, z) as the splat takes it: (u0, v0, fu, fv, z), its pixel (column, row) and its
+    fractions there (u = u0 + fu, v = v0 + fv, fu and fv in [0, 1))."""
+    u = uvz[j, 0]
+    v = uvz[j, 1]
+    u0 = int(np.floor(u))
+    v0 = int(np.floor(v))
+    return u0, v0, u - u0, v - v0, uvz[j, 2]
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _inside(u0, v0, out_w, out_h):
     """Whether all four neighbours of a point at (u0 + fu, v0 + fv) lie inside an ``out_w`` x ``out_h`` image."""
     return 0 <= u0 and u0 + 1 < out_w and 0 <= v0 and v0 + 1 < out_h
@@ -56,12 +76,18 @@ def _weights(fu, fv):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _points_compact(depth, rays, R, t, kind, k, qext, out_w, out_h, uvz, idx):
+def _points_compact(depth, rays, R, t, kind, k, qext, out_w, out_h, uvz, idx, row_start, row_reach):
     """Thermal pixel coordinates and depth of the ZED pixels in view (with depth, in front, projecting inside), in
-    pixel order: ``uvz[j]`` (u, v, z) of ZED pixel ``idx[j]`` (flattened); returns how many."""
+    pixel order: ``uvz[j]`` (u, v, z) of ZED pixel ``idx[j]`` (flattened); returns how many. Per ZED row r: its points
+    are ``uvz[row_start[r]:row_start[r + 1]]`` (``row_start``: H + 1), and ``row_reach[r]`` (H, 2) the lowest and the
+    highest thermal row their bilinear corners reach, ``floor(v)`` and ``floor(v) + 1`` (``out_h`` and -1 for a row
+    without points)."""
     H, W = depth.shape
     n = 0
     for r in range(H):
+        row_start[r] = n
+        lo = out_h
+        hi = -1
         for c in range(W):
             i = r * W + c
             d = depth[r, c]
@@ -86,99 +112,110 @@ def _points_compact(depth, rays, R, t, kind, k, qext, out_w, out_h, uvz, idx):
             uvz[n, 2] = z
             idx[n] = i
             n += 1
+            v0 = int(np.floor(v))
+            lo = min(lo, v0)
+            hi = max(hi, v0 + 1)
+        row_reach[r, 0] = lo
+        row_reach[r, 1] = hi
+    row_start[H] = n
     return n
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _splat_packed(uvz, idx, n, src, out_h, out_w, tol, zbuf, packed):
-    """The two passes over the ``n`` points in view: pass 0 into the z-buffer ``zbuf`` (h, w; +inf on entry), pass 1
-    into ``packed`` (h, w, C + 2; 0 on entry, C-contiguous): the C colour sums, the weight sum, the weighted depth
-    sum of each pixel side by side. The same additions in the same order as three separate arrays: the same sums to
-    the bit. Three colours (the export's BGR) go through :func:`_blend3`. A point whose four neighbours are all inside
-    (all but the image's rim) takes them without a bounds test, and the z-buffer keeps the nearer depth with a
-    ``min`` instead of a branch on the comparison (unpredictable where surfaces meet): the same result, the splat
-    1.15 to 1.25 times faster on the export's images (docs/dataset.md "Speed")."""
-    C = src.shape[1]
+def _zbuffer(uvz, n, out_h, out_w, zbuf):
+    """Pass 0 of the splat over the ``n`` points in view: each neighbouring pixel a point touches (bilinear weight
+    > 0) keeps the nearest depth in ``zbuf`` (h, w; +inf on entry). A point whose four neighbours are all inside (all
+    but the image's rim) takes them without a bounds test; a depth is stored only where it is nearer (a branch, not a
+    ``min``: a store on every corner made each point wait for the previous point's stores to the same pixels)."""
     zflat = zbuf.reshape(out_h * out_w)
-    for j in range(n):                      # pass 0: the z-buffer
-        u = uvz[j, 0]
-        v = uvz[j, 1]
-        z = uvz[j, 2]
-        u0 = int(np.floor(u))
-        v0 = int(np.floor(v))
-        fu = u - u0
-        fv = v - v0
+    for j in range(n):
+        u0, v0, fu, fv, z = _point(uvz, j)
         if _inside(u0, v0, out_w, out_h):
             q = v0 * out_w + u0
             w0, w1, w2, w3 = _weights(fu, fv)
-            if w0 > 0.0:
-                zflat[q] = min(zflat[q], z)
-            if w1 > 0.0:
-                zflat[q + 1] = min(zflat[q + 1], z)
-            if w2 > 0.0:
-                zflat[q + out_w] = min(zflat[q + out_w], z)
-            if w3 > 0.0:
-                zflat[q + out_w + 1] = min(zflat[q + out_w + 1], z)
+            if w0 > 0.0 and z < zflat[q]:
+                zflat[q] = z
+            if w1 > 0.0 and z < zflat[q + 1]:
+                zflat[q + 1] = z
+            if w2 > 0.0 and z < zflat[q + out_w]:
+                zflat[q + out_w] = z
+            if w3 > 0.0 and z < zflat[q + out_w + 1]:
+                zflat[q + out_w + 1] = z
             continue
         for corner in range(4):             # on the image's rim
             uu, vv, w = _corner(u0, v0, fu, fv, corner)
             if 0 <= vv < out_h and 0 <= uu < out_w and w > 0.0 and z < zflat[vv * out_w + uu]:
                 zflat[vv * out_w + uu] = z
-    if C == 3:
-        _blend3(uvz, idx, n, src, out_h, out_w, tol, zbuf, packed.reshape(out_h * out_w * 5))
-        return
-    for j in range(n):                      # pass 1: the surface nearest each pixel blends
-        u = uvz[j, 0]
-        v = uvz[j, 1]
-        z = uvz[j, 2]
-        u0 = int(np.floor(u))
-        v0 = int(np.floor(v))
-        i = idx[j]
-        for corner in range(4):
-            uu, vv, w = _corner(u0, v0, u - u0, v - v0, corner)
-            if 0 <= vv < out_h and 0 <= uu < out_w and w > 0.0 and z <= zbuf[vv, uu] * (1.0 + tol):
-                for ch in range(C):
-                    packed[vv, uu, ch] += w * src[i, ch]
-                packed[vv, uu, C] += w
-                packed[vv, uu, C + 1] += w * z
 
 
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def _blend3(uvz, idx, n, src, out_h, out_w, tol, zbuf, flat):
-    """Pass 1 of :func:`_splat_packed` for three colours, into its accumulator flattened (``flat``: h * w * 5): each
-    point's colour read once, a corner's five sums at one computed offset. The same products and additions in the
-    same order as the general loop (the whole splat 1.2 to 1.25 times faster, docs/dataset.md "Speed")."""
-    row = out_w * 5
-    for j in range(n):
-        u = uvz[j, 0]
-        v = uvz[j, 1]
-        z = uvz[j, 2]
-        u0 = int(np.floor(u))
-        v0 = int(np.floor(v))
-        fu = u - u0
-        fv = v - v0
-        i = idx[j]
-        b = np.float64(src[i, 0])
-        g = np.float64(src[i, 1])
-        r = np.float64(src[i, 2])
-        if _inside(u0, v0, out_w, out_h):
-            p = (v0 * out_w + u0) * 5
-            w0, w1, w2, w3 = _weights(fu, fv)
-            _add5(flat, p, w0, z, zbuf[v0, u0] * (1.0 + tol), b, g, r)
-            _add5(flat, p + 5, w1, z, zbuf[v0, u0 + 1] * (1.0 + tol), b, g, r)
-            _add5(flat, p + row, w2, z, zbuf[v0 + 1, u0] * (1.0 + tol), b, g, r)
-            _add5(flat, p + row + 5, w3, z, zbuf[v0 + 1, u0 + 1] * (1.0 + tol), b, g, r)
-            continue
-        for corner in range(4):             # on the image's rim
-            uu, vv, w = _corner(u0, v0, fu, fv, corner)
-            if 0 <= vv < out_h and 0 <= uu < out_w:
-                _add5(flat, vv * row + uu * 5, w, z, zbuf[vv, uu] * (1.0 + tol), b, g, r)
+@numba.njit(cache=True, error_model="numpy")
+def _blend_rows(uvz, idx, src, out_h, out_w, tol, zbuf, row_start, final_below, ring, finish, min_weight,
+                image, mask, depth_mm):
+    """Pass 1 of the splat, after :func:`_zbuffer`: the points of each ZED row in turn (``row_start``, from
+    :func:`_points_compact`) add, where they are on the nearest surface, into ``ring`` (R, w, C + 2; zeros on entry,
+    R a power of two): thermal row v's C colour sums, weight sum and weighted depth sum side by side in ring row
+    ``v % R``. With ``finish`` (1), before the points of ZED row r every thermal row below ``final_below[r]`` (no point
+    of row r or after reaches it) is converted by :func:`_finish_row` into ``image``, ``mask`` and ``depth_mm`` and
+    its ring row zeroed, and the rows left are converted at the end; returns the count of valid pixels. R must hold
+    every row open at once (:func:`.register.ring_plan`). With ``finish`` 0 nothing is converted (R >= h: ``ring``
+    holds the whole image's sums, for the float path) and 0 is returned.
+
+    Each point's colour is read once and a corner's sums are added at one computed offset; three colours (the
+    export's BGR) go through :func:`_add5`. The same products and additions in the same order as a whole-image
+    accumulator: the same sums to the bit."""
+    H = row_start.shape[0] - 1
+    C = src.shape[1]
+    S = C + 2
+    m = ring.shape[0] - 1
+    row = out_w * S
+    flat = ring.reshape(ring.shape[0] * row)
+    done = 0
+    valid = 0
+    for r in range(H):
+        if finish:
+            while done < final_below[r]:
+                valid += _finish_row(flat, (done & m) * row, done, out_w, C, min_weight, image, mask, depth_mm)
+                done += 1
+        for j in range(row_start[r], row_start[r + 1]):
+            u0, v0, fu, fv, z = _point(uvz, j)
+            i = idx[j]
+            if C == 3:
+                b = np.float64(src[i, 0])
+                g = np.float64(src[i, 1])
+                rr = np.float64(src[i, 2])
+                if _inside(u0, v0, out_w, out_h):
+                    p0 = (v0 & m) * row + u0 * S
+                    p1 = ((v0 + 1) & m) * row + u0 * S
+                    w0, w1, w2, w3 = _weights(fu, fv)
+                    _add5(flat, p0, w0, z, zbuf[v0, u0] * (1.0 + tol), b, g, rr)
+                    _add5(flat, p0 + S, w1, z, zbuf[v0, u0 + 1] * (1.0 + tol), b, g, rr)
+                    _add5(flat, p1, w2, z, zbuf[v0 + 1, u0] * (1.0 + tol), b, g, rr)
+                    _add5(flat, p1 + S, w3, z, zbuf[v0 + 1, u0 + 1] * (1.0 + tol), b, g, rr)
+                    continue
+                for corner in range(4):             # on the image's rim
+                    uu, vv, w = _corner(u0, v0, fu, fv, corner)
+                    if 0 <= vv < out_h and 0 <= uu < out_w:
+                        _add5(flat, (vv & m) * row + uu * S, w, z, zbuf[vv, uu] * (1.0 + tol), b, g, rr)
+                continue
+            for corner in range(4):                 # any other number of colours
+                uu, vv, w = _corner(u0, v0, fu, fv, corner)
+                if 0 <= vv < out_h and 0 <= uu < out_w and w > 0.0 and z <= zbuf[vv, uu] * (1.0 + tol):
+                    p = (vv & m) * row + uu * S
+                    for ch in range(C):
+                        flat[p + ch] += w * src[i, ch]
+                    flat[p + C] += w
+                    flat[p + C + 1] += w * z
+    if finish:
+        while done < out_h:
+            valid += _finish_row(flat, (done & m) * row, done, out_w, C, min_weight, image, mask, depth_mm)
+            done += 1
+    return valid
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
 def _add5(flat, p, w, z, zmax, b, g, r):
-    """One corner of :func:`_blend3`: the five sums at ``flat[p:p + 5]`` when the weight is positive and the point
-    is on the nearest surface (``z <= zmax``)."""
+    """One corner of a three-colour point in :func:`_blend_rows`: the five sums at ``flat[p:p + 5]`` when the weight
+    is positive and the point is on the nearest surface (``z <= zmax``)."""
     if w > 0.0 and z <= zmax:
         flat[p] += w * b
         flat[p + 1] += w * g
@@ -187,31 +224,35 @@ def _add5(flat, p, w, z, zmax, b, g, r):
         flat[p + 4] += w * z
 
 
-@numba.njit(cache=True, error_model="numpy")
-def _finish_u8(packed, min_weight, image, mask, depth_mm):
-    """:func:`_finish` then the export's conversions, per pixel with the same float32 steps, from the packed
-    accumulator (:func:`_splat_packed`); returns the count of valid pixels."""
-    h, w, C = packed.shape[0], packed.shape[1], packed.shape[2] - 2
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _finish_row(flat, base, v, out_w, C, min_weight, image, mask, depth_mm):
+    """Thermal row ``v`` from its sums at ``flat[base:base + out_w * (C + 2)]``: the weighted mean colour, mask and
+    depth, with the float32 steps of register._finish and the export's conversions (rounded half to even and clipped
+    to uint8; 255 / 0; millimetres truncated and clipped to uint16, 0 where invalid); then those sums zeroed.
+    Returns the row's count of valid pixels."""
+    S = C + 2
     n = 0
-    for r in range(h):
-        for c in range(w):
-            ws = packed[r, c, C]
-            if ws >= min_weight:
-                n += 1
-                mask[r, c] = 255
-                for ch in range(C):
-                    v = np.rint(np.float32(packed[r, c, ch] / ws))
-                    image[r, c, ch] = 0 if v < 0 else (255 if v > 255 else np.uint8(v))
-                d = np.float32(packed[r, c, C + 1] / ws) * np.float32(1000.0)
-                if not (d > 0):      # NaN or not positive
-                    depth_mm[r, c] = 0
-                elif d > 65535:
-                    depth_mm[r, c] = 65535
-                else:
-                    depth_mm[r, c] = np.uint16(d)
+    for c in range(out_w):
+        p = base + c * S
+        ws = flat[p + C]
+        if ws >= min_weight:
+            n += 1
+            mask[v, c] = 255
+            for ch in range(C):
+                x = np.rint(np.float32(flat[p + ch] / ws))
+                image[v, c, ch] = 0 if x < 0 else (255 if x > 255 else np.uint8(x))
+            d = np.float32(flat[p + C + 1] / ws) * np.float32(1000.0)
+            if not (d > 0):      # NaN or not positive
+                depth_mm[v, c] = 0
+            elif d > 65535:
+                depth_mm[v, c] = 65535
             else:
-                mask[r, c] = 0
-                depth_mm[r, c] = 0
-                for ch in range(C):
-                    image[r, c, ch] = 0
+                depth_mm[v, c] = np.uint16(d)
+        else:
+            mask[v, c] = 0
+            depth_mm[v, c] = 0
+            for ch in range(C):
+                image[v, c, ch] = 0
+    for q in range(base, base + out_w * S):
+        flat[q] = 0.0
     return n

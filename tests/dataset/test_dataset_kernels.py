@@ -187,8 +187,11 @@ def _checked(name: str):
     return kernels.Checked(rec, kernels.KERNELS[name], fallback), rec, fallback_calls
 
 
-def _finish_args(**change):
-    args = dict(packed=np.zeros((4, 5, 5)), min_weight=0.5, image=np.zeros((4, 5, 3), np.uint8),
+def _blend_args(**change):
+    """Arguments of the kind blend_rows takes (register_kernels._blend_rows), by name, some replaced."""
+    args = dict(uvz=np.zeros((4, 3)), idx=np.zeros(4, np.int64), src=np.zeros((4, 3), np.uint8), out_h=4, out_w=5,
+                tol=0.02, zbuf=np.zeros((4, 5)), row_start=np.zeros(3, np.int64), final_below=np.zeros(2, np.int64),
+                packed=np.zeros((4, 5, 5)), finish=1, min_weight=0.5, image=np.zeros((4, 5, 3), np.uint8),
                 mask=np.zeros((4, 5), np.uint8), depth_mm=np.zeros((4, 5), np.uint16))
     return tuple((args | change).values())
 
@@ -202,8 +205,9 @@ def _read_only(a: np.ndarray) -> np.ndarray:
     ({}, "extension"),
     ({"min_weight": 1}, "extension"),                                   # an int where a float is taken
     ({"min_weight": np.float32(0.5)}, "extension"),
-    ({"packed": _read_only(np.zeros((4, 5, 5)))}, "extension"),         # read, not written: read-only is fine
+    ({"zbuf": _read_only(np.zeros((4, 5)))}, "extension"),              # read, not written: read-only is fine
     ({"packed": np.zeros((4, 5, 5), np.float32)}, "jit"),               # another dtype
+    ({"src": np.zeros((4, 3), np.uint16)}, "jit"),
     ({"packed": np.zeros((4, 5, 5), ">f8")}, "jit"),                    # another byte order
     ({"packed": np.zeros((4, 5))}, "jit"),                              # other dimensions
     ({"packed": np.zeros((4, 5, 10))[..., ::2]}, "jit"),                # not C-contiguous
@@ -215,8 +219,8 @@ def _read_only(a: np.ndarray) -> np.ndarray:
 def test_checked_sends_the_extension_only_the_signatures_arguments(change, where):
     """The extension's functions read memory as their signature says (a float32 array read as float64 crashes the
     process); Checked calls them only with exactly those arguments and sends any other call to the JIT."""
-    checked, rec, jit_calls = _checked("finish_u8")
-    args = _finish_args(**change)
+    checked, rec, jit_calls = _checked("blend_rows")
+    args = _blend_args(**change)
     assert checked(*args) == where
     assert (len(rec.calls), len(jit_calls)) == ((1, 0) if where == "extension" else (0, 1))
     assert (rec.calls or jit_calls)[0] is not None
@@ -231,8 +235,8 @@ def test_checked_takes_integers_in_int64s_range_for_integers(value, where):
 
 
 def test_checked_sends_a_call_with_another_count_of_arguments_to_the_jit():
-    checked, rec, jit_calls = _checked("finish_u8")
-    assert checked(*_finish_args()[:-1]) == "jit" and not rec.calls
+    checked, rec, jit_calls = _checked("blend_rows")
+    assert checked(*_blend_args()[:-1]) == "jit" and not rec.calls
 
 
 def test_every_kernel_names_a_function_of_its_module_and_a_signature_numba_can_read():

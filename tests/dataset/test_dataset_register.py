@@ -176,8 +176,8 @@ def test_register_u8_writes_the_pixels_of_the_float_path(scene):
 
 
 def _splat_reference(uvz, src, h, w, tol):
-    """The two passes of register_kernels._splat_packed as plain Python, point by point and corner by corner in the same
-    order: the same sums to the bit."""
+    """The two passes of the splat (register_kernels._zbuffer, _blend_rows) as plain Python, point by point and
+    corner by corner in the same order: the same sums to the bit."""
     zbuf = np.full((h, w), np.inf)
     packed = np.zeros((h, w, src.shape[1] + 2))
     corners = []
@@ -205,7 +205,7 @@ def test_splat_on_the_rim_and_on_whole_pixels_is_the_reference_to_the_bit(channe
     the plain two-pass loop gives, bit for bit: points anywhere in (-1, w) x (-1, h), on whole and half pixels (zero
     weights), on the last row and column, occluding one another (a z-buffer that differs from pixel to pixel, some
     points within its tolerance)."""
-    from platform_tools.dataset.register_kernels import _splat_packed
+    from tests.dataset.test_dataset_speed_register import splat
     rng = np.random.default_rng(7)
     h, w, tol = 12, 16, 0.02
     uv = np.concatenate([rng.uniform([-1, -1], [w, h], (300, 2)),
@@ -216,8 +216,59 @@ def test_splat_on_the_rim_and_on_whole_pixels_is_the_reference_to_the_bit(channe
     z[::3] = z[1::3][:len(z[::3])] * 1.01               # and some points within the tolerance of another
     uvz = np.ascontiguousarray(np.column_stack([uv, z]))
     src = rng.integers(0, 256, (len(uvz), channels)).astype(np.uint8)
-    zbuf, packed = np.full((h, w), np.inf), np.zeros((h, w, channels + 2))
-    _splat_packed(uvz, np.arange(len(uvz)), len(uvz), src, h, w, tol, zbuf, packed)
+    zbuf, packed = splat(uvz, np.arange(len(uvz)), src, h, w, tol)
     ref_z, ref_packed = _splat_reference(uvz, src, h, w, tol)
     assert np.array_equal(zbuf, ref_z) and np.array_equal(packed, ref_packed)
     assert (packed[..., -2] > 0).sum() > 0.8 * h * w           # the points cover the image, rim included
+
+
+def test_the_ring_plan_holds_every_open_row_and_finalises_rows_no_later_point_reaches():
+    """ring_plan on hand-made reaches: a row is final before ZED row r when no point of rows r.. reaches it; the ring
+    holds the most rows open at once, as a power of two, never more than the image's; empty ZED rows (out_h, -1)
+    change nothing; points above the image (-1) do not make a negative bound."""
+    from platform_tools.dataset.register import ring_plan
+    reach = np.array([[-1, 3], [2, 6], [12, 6], [5, 9], [7, 12]])
+    reach[2] = [100, -1]                                    # a ZED row with no point in view
+    final, rows = ring_plan(reach, 100)
+    assert final.tolist() == [0, 2, 5, 5, 7] and final.dtype == np.int64 and final.flags.c_contiguous
+    # open at once: row 0: -1..3 (5), row 1: 2..6 (5), row 2: 5..6, row 3: 5..9 (5), row 4: 7..12 (6) -> 8
+    assert rows == 8
+    assert ring_plan(np.array([[0, 60], [0, 61]]), 50)[1] == 64            # at most the image's power of two
+    assert ring_plan(np.array([[5, 6]]), 10) == (ring_plan(np.array([[5, 6]]), 10)[0], 2)
+    assert ring_plan(np.array([[10, -1], [10, -1]]), 10)[1] == 1             # nothing in view
+
+
+@pytest.mark.parametrize("roll", [0.0, 0.5, np.pi / 2, np.pi])
+def test_register_u8_rows_from_a_ring_are_the_plain_two_pass_reference(roll):
+    """register_u8 converts each thermal row from a ring of rows as soon as no later point reaches it. Against the
+    plain Python two-pass splat (_splat_reference, the whole image, no ring) and numpy's conversions, bit for bit, on
+    small cameras rolled about the optical axis: at 0 the ZED rows reach narrow bands of thermal rows (a ring smaller
+    than the image, which wraps), at 90 and 180 degrees they reach all of them (a ring of the whole image); a near box
+    occludes a far wall, some depth is missing, some points fall outside."""
+    from platform_tools.dataset.register import _finish, ring_plan
+    zed = mrcal.cameramodel(intrinsics=("LENSMODEL_PINHOLE", np.array([40.0, 40.0, 23.5, 17.5])),
+                            imagersize=np.array([48, 36]))
+    th = mrcal.cameramodel(intrinsics=("LENSMODEL_STEREOGRAPHIC", np.array([30.0, 30.0, 19.5, 15.5])),
+                           imagersize=np.array([40, 32]))
+    reg = Registrar(zed, th, np.array([0.0, 0.0, roll, 0.05, 0.01, 0.0]), TOL, min_coverage=0.5)
+    rng = np.random.default_rng(3)
+    depth = np.full((36, 48), 4.0) + rng.uniform(0, 0.01, (36, 48))
+    depth[10:22, 14:30] = 1.5                                # the near box
+    depth[rng.random((36, 48)) < 0.05] = np.nan
+    depth = depth.astype(np.float32)
+    bgr = rng.integers(0, 256, (36, 48, 3), dtype=np.uint8)
+    _, _, n, _, reach = reg._in_view(depth)
+    rows = ring_plan(reach, 32)[1]
+    assert (rows < 32) if roll == 0.0 else (rows == 32)
+    u, v, z = reg.points(depth)
+    ok = ~np.isnan(u)
+    zbuf, sums = _splat_reference(np.column_stack([u[ok], v[ok], z[ok]]), bgr.reshape(-1, 3)[ok], 32, 40, reg.tol)
+    want = _finish(sums[..., :3], sums[..., 3], sums[..., 4], reg.min_weight)
+    got = reg.register_u8(depth, bgr)
+    assert np.array_equal(got.image, want.image_u8()) and np.array_equal(got.mask, want.mask.astype(np.uint8) * 255)
+    assert np.array_equal(got.depth_mm, np.clip(np.nan_to_num(want.depth_m * 1000.0, nan=0.0), 0, 65535)
+                          .astype(np.uint16))
+    assert 0.3 < got.fraction < 0.95 and n > 1000
+    near = got.depth_mm[got.mask > 0]
+    assert (near < 2000).any() and (near > 3500).any()     # both surfaces registered
+

@@ -1,5 +1,5 @@
-"""The registration's three-colour pass (register_kernels._blend3: each point's colour read once, a corner's five sums at one
-offset of the flattened accumulator) adds exactly what the general loop adds: each colour splatted alone through the
+"""The registration's three-colour pass (register_kernels._blend_rows through _add5: each point's colour read once, a
+corner's five sums at one offset of the flattened accumulator) adds exactly what its general loop adds: each colour splatted alone through the
 general loop (one channel) gives, to the bit, that colour's sums, the weight sums and the depth sums of the
 three-colour splat. Points overlap (several per pixel, at depths inside and outside the z-buffer's tolerance), fall
 on the image's edges and outside it, and sit on whole pixel coordinates (zero bilinear weights)."""
@@ -23,10 +23,20 @@ def _points(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _splat(uvz, idx, src, tol=0.02) -> np.ndarray:
-    packed = np.zeros((H, W, src.shape[1] + 2))
-    zbuf = np.full((H, W), np.inf)
-    register_kernels._splat_packed(uvz, idx, len(idx), src, H, W, tol, zbuf, packed)
-    return packed
+    return splat(uvz, idx, src, H, W, tol)[1]
+
+
+def splat(uvz, idx, src, h, w, tol) -> tuple[np.ndarray, np.ndarray]:
+    """(z-buffer, sums (h, w, C + 2)) of both passes over points given in any order (register_kernels._zbuffer, then
+    _blend_rows with every point in one row and a ring of the whole image, no row converted)."""
+    zbuf = np.full((h, w), np.inf)
+    register_kernels._zbuffer(uvz, len(idx), h, w, zbuf)
+    ring = np.zeros((1 << (h - 1).bit_length(), w, src.shape[1] + 2))
+    c = src.shape[1]
+    register_kernels._blend_rows(uvz, idx, src, h, w, tol, zbuf, np.array([0, len(idx)]), np.zeros(1, np.int64), ring,
+                                 0, 0.5, np.empty((1, 1, c), np.uint8), np.empty((1, 1), np.uint8),
+                                 np.empty((1, 1), np.uint16))
+    return zbuf, ring[:h]
 
 
 def test_the_three_colour_pass_adds_what_the_general_loop_adds():
