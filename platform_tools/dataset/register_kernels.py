@@ -125,22 +125,23 @@ def _points_compact(depth, rays, R, t, kind, k, qext, out_w, out_h, uvz, idx, ro
 def _zbuffer(uvz, n, out_h, out_w, zbuf):
     """Pass 0 of the splat over the ``n`` points in view: each neighbouring pixel a point touches (bilinear weight
     > 0) keeps the nearest depth in ``zbuf`` (h, w; +inf on entry). A point whose four neighbours are all inside (all
-    but the image's rim) takes them without a bounds test; a depth is stored only where it is nearer (a branch, not a
-    ``min``: a store on every corner made each point wait for the previous point's stores to the same pixels)."""
+    but the image's rim) takes them without a bounds test, and keeps the nearer depth with a ``min`` instead of a
+    branch on the comparison (unpredictable where surfaces meet; 1.15-1.25x on an AMD Zen 1, the same on the Intel
+    Xeon of the eighth round: 3.19 against 3.26 ms a view with a branch)."""
     zflat = zbuf.reshape(out_h * out_w)
     for j in range(n):
         u0, v0, fu, fv, z = _point(uvz, j)
         if _inside(u0, v0, out_w, out_h):
             q = v0 * out_w + u0
             w0, w1, w2, w3 = _weights(fu, fv)
-            if w0 > 0.0 and z < zflat[q]:
-                zflat[q] = z
-            if w1 > 0.0 and z < zflat[q + 1]:
-                zflat[q + 1] = z
-            if w2 > 0.0 and z < zflat[q + out_w]:
-                zflat[q + out_w] = z
-            if w3 > 0.0 and z < zflat[q + out_w + 1]:
-                zflat[q + out_w + 1] = z
+            if w0 > 0.0:
+                zflat[q] = min(zflat[q], z)
+            if w1 > 0.0:
+                zflat[q + 1] = min(zflat[q + 1], z)
+            if w2 > 0.0:
+                zflat[q + out_w] = min(zflat[q + out_w], z)
+            if w3 > 0.0:
+                zflat[q + out_w + 1] = min(zflat[q + out_w + 1], z)
             continue
         for corner in range(4):             # on the image's rim
             uu, vv, w = _corner(u0, v0, fu, fv, corner)
