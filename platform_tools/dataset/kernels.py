@@ -184,16 +184,21 @@ def extension_path(directory: Path) -> Path:
 
 
 def _extension():
-    """The extension module built for this key, or None (none built, or the JIT chosen); loaded once."""
+    """The extension module built for this key, or None (none built, the JIT chosen, or a file that does not load:
+    its error kept for :func:`backend`); loaded once."""
     if "module" not in _loaded:
         module = None
         directory = folder()
         if directory is not None:
             path = extension_path(directory)
             if path.is_file():
-                spec = importlib.util.spec_from_file_location(path.name[:-len(SUFFIX)], path)
-                module = importlib.util.module_from_spec(spec)
-                spec.loader.exec_module(module)
+                try:
+                    spec = importlib.util.spec_from_file_location(path.name[:-len(SUFFIX)], path)
+                    module = importlib.util.module_from_spec(spec)
+                    spec.loader.exec_module(module)
+                except ImportError as exc:         # a damaged file: the JIT serves, status says why
+                    _loaded["error"] = f"{path.name} did not load: {str(exc).splitlines()[0]}"
+                    module = None
         _loaded["module"] = module
     return _loaded["module"]
 
@@ -209,9 +214,12 @@ def get(name: str):
 
 
 def backend() -> str:
-    """Which kernels this process uses: ``extension <file>`` or ``numba JIT``."""
+    """Which kernels this process uses: ``extension <file>``, or ``numba JIT`` (with the reason when the extension
+    for this key is there but did not load)."""
     module = _extension()
-    return f"extension {Path(module.__file__).name}" if module is not None else "numba JIT"
+    if module is not None:
+        return f"extension {Path(module.__file__).name}"
+    return f"numba JIT ({_loaded['error']})" if "error" in _loaded else "numba JIT"
 
 
 def _caller(dispatcher, n: int):

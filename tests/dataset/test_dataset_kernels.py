@@ -111,6 +111,25 @@ def test_a_key_that_names_no_file_uses_the_jit(built, tmp_path):
     assert json.loads(r.stdout)["built"] is True and json.loads(r.stdout)["key"] in ext.name
 
 
+def test_an_extension_that_does_not_load_leaves_the_jit_and_says_why(built, tmp_path):
+    """A file with this key's name that is no extension (a damaged build): the kernels are the JIT's, and the status
+    names the file and the loader's error instead of failing."""
+    damaged = tmp_path / "damaged"
+    damaged.mkdir()
+    (damaged / next(built.iterdir()).name).write_bytes(b"not an ELF file")
+    code = ("import json, numpy as np\n"
+            "from platform_tools.dataset import kernels\n"
+            "raw, out = np.arange(6, dtype=np.uint16), np.zeros(6, np.uint8)\n"
+            "kernels.get('apply_lut')(raw, np.array([10, 20, 30], np.uint8), 2, 4, out)\n"
+            "print(json.dumps({'backend': kernels.backend(), 'out': out.tolist()}))\n")
+    r = _run(["-c", code], str(damaged))
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["out"] == [10, 10, 10, 20, 30, 30]
+    assert doc["backend"].startswith("numba JIT (") and next(built.iterdir()).name in doc["backend"]
+    assert "did not load" in doc["backend"]
+
+
 def test_the_key_follows_the_kernels_sources(tmp_path):
     """A kernel's source edited (one comment line) gives another key, so the extension built before it is not used."""
     copy = tmp_path / "tree"
