@@ -27,19 +27,6 @@ def _run(args: list[str], env_kernels: str | None, **kw) -> subprocess.Completed
                           **kw)
 
 
-@pytest.fixture(scope="module")
-def built(tmp_path_factory) -> Path:
-    """A folder holding the extension for this machine's key, built by ``python -m platform_tools.dataset.kernels
-    build --dir``."""
-    where = tmp_path_factory.mktemp("kernels")
-    r = _run(["-m", "platform_tools.dataset.kernels", "build", "--dir", str(where), "--json"], None)
-    assert r.returncode == 0, r.stdout + r.stderr
-    doc = json.loads(r.stdout)
-    assert doc["ok"] and doc["built"] and Path(doc["extension"]).parent == where
-    assert [p.name for p in where.iterdir()] == [Path(doc["extension"]).name]      # no build folder left behind
-    return where
-
-
 #: in a fresh interpreter: registrations through each lens kind the kernels project (pinhole, stereographic, OpenCV;
 #: two surfaces, sky without depth, points past the image's rim) in three colours and in one, the 8-bit conversion of
 #: frames that take the min-max and the clipped path, all saved to argv[1]; with the backend and whether numba was

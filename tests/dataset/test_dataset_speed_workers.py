@@ -89,16 +89,6 @@ def _warm_noting(where: str) -> None:
         f.write(f"{os.getpid()}\n")
 
 
-@pytest.fixture(scope="module")
-def built(tmp_path_factory) -> str:
-    """A folder with the kernels' extension for this machine (what the bootstrap builds beside the package)."""
-    where = tmp_path_factory.mktemp("kernels")
-    r = subprocess.run([sys.executable, "-m", "platform_tools.dataset.kernels", "build", "--dir", str(where)],
-                       cwd=REPO, capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stderr
-    return str(where)
-
-
 def _pool_run(tmp_path, method: str | None = None, first: str = "run", kernels_env: str = "jit") \
         -> tuple[dict, list[int]]:
     """(what _POOL printed, the pids the warm-up ran in); ``method``: engines.START_ENV set to it; ``first``: "map"
@@ -136,7 +126,7 @@ def test_forked_workers_each_warm_up_once_after_the_index(tmp_path, built, metho
     which run cold (the index's scans need no kernel, and do not wait for them), or, with no map, before the first
     task. A worker done with its calls early does not take the other's warm-up (each waits for the other). With
     the extension built, no worker imports numba."""
-    out, warmed = _pool_run(tmp_path, method, first, built if extension else "jit")
+    out, warmed = _pool_run(tmp_path, method, first, str(built) if extension else "jit")
     assert out["method"] == "fork"
     assert sorted(warmed) == sorted(out["workers"])    # once in each worker, never in the parent
     assert not out["parent_setuptools"]
@@ -150,7 +140,7 @@ def test_forked_workers_each_warm_up_once_after_the_index(tmp_path, built, metho
 @pytest.mark.parametrize("extension", [True, False])
 def test_spawned_workers_each_warm_up_before_their_first_task(tmp_path, built, extension):
     """With START_ENV=spawn (the default off Linux) each worker runs the warm-up as it starts."""
-    out, warmed = _pool_run(tmp_path, "spawn", kernels_env=built if extension else "jit")
+    out, warmed = _pool_run(tmp_path, "spawn", kernels_env=str(built) if extension else "jit")
     assert out["method"] == "spawn"
     assert sorted(warmed) == sorted(out["workers"])      # in each worker, not in the parent
     _check_warm(out, extension)
@@ -308,7 +298,7 @@ def test_with_the_extension_a_real_export_never_falls_back_to_the_jit(sim, tmp_p
         "print(json.dumps({'backend': kernels.backend(), 'jitted': sorted(kernels._jitted),\n"
         "                  'numba': 'numba' in sys.modules}))\n")
     outs = {}
-    for name, env in (("extension", built), ("jit", "jit")):
+    for name, env in (("extension", str(built)), ("jit", "jit")):
         outs[name] = tmp_path / name
         r = subprocess.run([sys.executable, "-c", code, str(sim[0]), str(outs[name])], cwd=REPO,
                            capture_output=True, text=True, timeout=600, env=os.environ | {kernels.ENV: env})
