@@ -23,7 +23,7 @@ cd "$(dirname "$0")"
 #   python3-dev build-essential  compile wheels that have no binary for this Python
 #   libgl1 libglib2.0-0     shared libraries the CadQuery/OCP wheels load
 #   chromium chromium-driver  the real browser the generated web pages are tested in
-#   shellcheck docker-compose  check the generated on-device files: shell entry scripts, and the
+#   docker-compose shellcheck  check the generated on-device files: shell entry scripts, and the
 #                           compose file through `docker-compose config` (no Docker engine needed)
 #   python3-cryptography openssl  SROS2 keys without ROS (rig-device sros2-keys), and the independent
 #                           tool (openssl verify / smime -verify) the tests check those keys with
