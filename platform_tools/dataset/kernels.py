@@ -79,6 +79,11 @@ KERNELS = {
                         "void", frozenset({4})),
 }
 
+#: modules whose values the kernels take in when they are compiled, beside the kernels' own: register's KIND_*
+#: constants (register_kernels imports them; numba compiles a module's globals in as constants), so that a change there
+#: changes the key too
+BAKED_IN = frozenset({"platform_tools.dataset.register"})
+
 #: numba's short scalar names in a signature -> numpy's
 _DTYPES = {"f4": "float32", "f8": "float64", "i8": "int64", "u1": "uint8", "u2": "uint16"}
 
@@ -161,10 +166,10 @@ def _numba_version() -> str:
 
 
 def key() -> str:
-    """The extension's key here: a hash of the kernels' source files and this module's, numba's and Python's versions
-    and this CPU (20 hexadecimal digits)."""
+    """The extension's key here: a hash of the kernels' source files, this module's and those of :data:`BAKED_IN`,
+    numba's and Python's versions and this CPU (20 hexadecimal digits)."""
     h = hashlib.sha256()
-    for module in sorted({k.module for k in KERNELS.values()} | {_SELF}):
+    for module in sorted({k.module for k in KERNELS.values()} | {_SELF} | BAKED_IN):
         spec = importlib.util.find_spec(module)
         h.update(module.encode() + b"\0" + Path(spec.origin).read_bytes() + b"\0")
     h.update(f"{_numba_version()}\0{sys.version}\0{SUFFIX}\0{_cpu()}".encode())

@@ -3,9 +3,10 @@ pixel with its depth, transform it into the thermal camera with the extrinsics, 
 thermal model; a z-buffer keeps the nearest surface per thermal pixel and bilinear splatting spreads
 each point over its four neighbouring pixels. Pixels without depth (NaN, inf, <= 0) are not splatted.
 
-Two passes over the points (numba, one core; the points in view first gathered into one (n, 3) array, and every
-thermal pixel's colour sums, weight and depth sum packed side by side in one array beside the z-buffer, so that
-pass 2 touches two cache lines per corner, not four arrays):
+Two passes over the points (numba kernels in :mod:`.register_kernels`, one core; the points in view first gathered
+into one (n, 3) array, and every thermal pixel's colour sums, weight and depth sum packed side by side beside the
+z-buffer, so that pass 2 touches two cache lines per corner, not four arrays; for the export's 8-bit images those sums
+live in a ring of thermal rows, each row converted as soon as no later point reaches it: :func:`ring_plan`):
 
 1. project every point; each neighbouring pixel it would touch (bilinear weight > 0) keeps the
    nearest depth (the z-buffer);
