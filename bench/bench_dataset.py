@@ -106,23 +106,35 @@ def previous_tree(tmp: Path, rev: str = BASELINE) -> Path:
                              check=True, capture_output=True).stdout
     with tarfile.open(fileobj=__import__("io").BytesIO(archive)) as tar:
         tar.extractall(tree)
-    if (tree / "platform_tools" / "dataset" / "kernels.py").is_file():      # as its bootstrap would leave it
+    if _has_kernels(tree):                  # as its bootstrap would leave it
         subprocess.run([sys.executable, "-m", "platform_tools.dataset.kernels", "build"], cwd=tree,
-                       env=dict(os.environ, PYTHONPATH=str(tree)), check=True, capture_output=True)
+                       env=tree_env(tree), check=True, capture_output=True)
     return tree
 
 
-def kernels_backend(tree: Path, extra_env: dict | None = None) -> str:
-    """Which kernels ``tree``'s export uses (platform_tools.dataset.kernels: "extension ..." or "numba JIT"), or
-    "numba JIT" for a tree from before that module."""
-    import subprocess
-    if not (tree / "platform_tools" / "dataset" / "kernels.py").is_file():
-        return "numba JIT"
+def _has_kernels(tree: Path) -> bool:
+    """Whether ``tree`` has platform_tools.dataset.kernels (the kernels compiled ahead of time, since b1f20b4)."""
+    return (tree / "platform_tools" / "dataset" / "kernels.py").is_file()
+
+
+def tree_env(tree: Path, extra_env: dict | None = None) -> dict:
+    """The environment a command of ``tree`` runs in: its code first on the path, this process's thread pins and
+    export switches (FORK_ENV, KERNELS_ENV) dropped, then ``extra_env``."""
     env = dict(os.environ, PYTHONPATH=str(tree))
-    env.pop(KERNELS_ENV, None)
-    env |= extra_env or {}
-    r = subprocess.run([sys.executable, "-m", "platform_tools.dataset.kernels", "status", "--json"], cwd=tree, env=env,
-                       check=True, capture_output=True, text=True)
+    for var in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", FORK_ENV,
+                KERNELS_ENV):
+        env.pop(var, None)
+    return env | (extra_env or {})
+
+
+def kernels_backend(tree: Path, extra_env: dict | None = None) -> str:
+    """Which kernels ``tree``'s export uses in the environment its runs get (platform_tools.dataset.kernels:
+    "extension ..." or "numba JIT"), or "numba JIT" for a tree from before that module."""
+    import subprocess
+    if not _has_kernels(tree):
+        return "numba JIT"
+    r = subprocess.run([sys.executable, "-m", "platform_tools.dataset.kernels", "status", "--json"], cwd=tree,
+                       env=tree_env(tree, extra_env), check=True, capture_output=True, text=True)
     return json.loads(r.stdout)["backend"]
 
 
@@ -137,11 +149,7 @@ def run_export(tree: Path, recording: Path, out: Path, rate: float, workers: int
     if out.exists():
         raise SystemExit(f"{out}: exists; each run writes into a new folder (see bench_export)")
     ru = resource.getrusage(resource.RUSAGE_CHILDREN)
-    env = dict(os.environ, PYTHONPATH=str(tree))
-    for var in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", FORK_ENV,
-                KERNELS_ENV):
-        env.pop(var, None)
-    env |= extra_env or {}
+    env = tree_env(tree, extra_env)
     cmd = [sys.executable, "-c", "import sys; from platform_tools.cli.main import main; sys.exit(main())",
            "export", str(recording), "--out", str(out), "--rate", str(rate), "--workers", str(workers),
            "--json", "-q"]

@@ -35,6 +35,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 #: the environment variable that chooses: "jit", or the folder holding the extension
 ENV = "PLATFORM_TOOLS_KERNELS"
 #: the extension's file name before its key
@@ -103,16 +105,13 @@ class Checked:
     (the JIT's dispatcher, made on first need)."""
 
     def __init__(self, function, kernel: Kernel, fallback):
-        import numpy as np
         self.function, self.kernel, self._fallback = function, kernel, fallback
-        self._np = np
         self._specs = [(np.dtype(d), n, i in kernel.writes) for i, (d, n) in enumerate(map(_parse, kernel.args))]
 
     def fits(self, args: tuple) -> bool:
         """Whether ``args`` are what the extension's function reads: arrays of the signature's dtype (native byte
         order), dimensions and C layout, aligned, writeable where written; integers in int64's range for integers,
         real numbers for floats."""
-        np = self._np
         if len(args) != len(self._specs):
             return False
         for a, (dtype, ndim, written) in zip(args, self._specs):
@@ -299,8 +298,9 @@ def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "status":
         directory = folder()
-        doc = {"key": key(), "extension": str(extension_path(directory)) if directory else None,
-               "built": bool(directory and extension_path(directory).is_file()), "backend": backend()}
+        path = extension_path(directory) if directory else None
+        doc = {"key": key(), "extension": str(path) if path else None, "built": bool(path and path.is_file()),
+               "backend": backend()}
         print(json.dumps(doc) if args.json else "\n".join(f"{k}: {v}" for k, v in doc.items()))
         return EXIT_OK
     t0 = time.perf_counter()
